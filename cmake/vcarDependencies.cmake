@@ -1,0 +1,9 @@
+# Every dependency is found through its own CMake config (Debian packages in brackets).
+find_package(Eigen3 3.4 REQUIRED NO_MODULE)        # libeigen3-dev
+find_package(xtl QUIET)                             # xtl-dev: xsimd 8's exported target links it
+find_package(xsimd 8 REQUIRED)                      # libxsimd-dev
+find_package(nlohmann_json 3 REQUIRED)              # nlohmann-json3-dev
+include(${CMAKE_CURRENT_LIST_DIR}/vcarStb.cmake)    # libstb-dev (pkg-config stb)
+if(VCAR_USE_OPENMP)
+  find_package(OpenMP COMPONENTS CXX)               # optional: serial and identical without
+endif()

@@ -1,0 +1,57 @@
+#pragma once
+// Images and masks: row-major, interleaved channels. A Mask is W x H, 8-bit, nonzero =
+// foreground (CONVENTIONS 4).
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+namespace vcar {
+
+template <class T>
+struct Image {
+  int width = 0, height = 0, channels = 1;
+  std::vector<T> data;
+
+  Image() = default;
+  Image(int w, int h, int c = 1, T fill = T{})
+      : width(w), height(h), channels(c), data(static_cast<std::size_t>(w) * h * c, fill) {}
+
+  bool empty() const noexcept { return data.empty(); }
+  std::size_t pixels() const noexcept { return static_cast<std::size_t>(width) * height; }
+  T& operator()(int x, int y, int c = 0) {
+    return data[(static_cast<std::size_t>(y) * width + x) * channels + c];
+  }
+  const T& operator()(int x, int y, int c = 0) const {
+    return data[(static_cast<std::size_t>(y) * width + x) * channels + c];
+  }
+};
+
+using Mask = Image<std::uint8_t>;      // 1 channel, nonzero = foreground
+using ImageRGB8 = Image<std::uint8_t>;  // 3 channels
+using ImageF = Image<float>;            // renderer output (rgb: 3 channels, alpha/depth: 1)
+
+// Foreground at a continuous point: the pixel containing it (floor); false outside the image.
+inline bool mask_at(const Mask& m, float u, float v) {
+  if (!(u >= 0.f && v >= 0.f && u < static_cast<float>(m.width) && v < static_cast<float>(m.height)))
+    return false;
+  return m.data[static_cast<std::size_t>(static_cast<int>(v)) * m.width + static_cast<int>(u)] != 0;
+}
+
+// Float image in [0,1] to 8-bit (round to nearest, clamped).
+inline Image<std::uint8_t> to_8bit(const ImageF& img) {
+  Image<std::uint8_t> out(img.width, img.height, img.channels);
+  for (std::size_t k = 0; k < img.data.size(); ++k) {
+    const float v = img.data[k] < 0.f ? 0.f : (img.data[k] > 1.f ? 1.f : img.data[k]);
+    out.data[k] = static_cast<std::uint8_t>(std::lround(v * 255.f));
+  }
+  return out;
+}
+
+// Predicted mask of a rendering: alpha > threshold (CONVENTIONS 6).
+inline Mask threshold(const ImageF& alpha, float a) {
+  Mask m(alpha.width, alpha.height, 1);
+  for (std::size_t k = 0; k < m.data.size(); ++k) m.data[k] = alpha.data[k] > a ? 255 : 0;
+  return m;
+}
+
+}  // namespace vcar
