@@ -1,0 +1,349 @@
+#pragma once
+// vcar::segment: the coarse-to-fine pipeline of Sec. 3.1. It only composes the stages:
+//   coarse VWV on the training views (Eq. 1-3)
+//   -> robust object sphere (Eq. 4-5) -> view completeness (Eq. 6, A.1-A.2)
+//   -> if Delta_max > Delta_th: SSS views (Eq. 7-8) rendered from G_coarse only, segmented with
+//      the training views rendered from G_coarse, fine VWV over V_train u V_sampled
+//   -> ABR (Eq. 9-14, B) on the training views' masks of the latest round.
+// Masks are streamed: each is voted on as the segmenter delivers it and then dropped; the
+// training views' masks that ABR needs later are kept run-length encoded (O(boundary) bytes).
+#include <chrono>
+#include <cstddef>
+#include <functional>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "vcar/algo/boundary_refinement.hpp"
+#include "vcar/algo/params.hpp"
+#include "vcar/algo/robust_sphere.hpp"
+#include "vcar/algo/spiral_sampler.hpp"
+#include "vcar/algo/view_completeness.hpp"
+#include "vcar/algo/visibility_voting.hpp"
+#include "vcar/concepts/renderer.hpp"
+#include "vcar/concepts/segmenter.hpp"
+#include "vcar/core/camera.hpp"
+#include "vcar/core/error.hpp"
+#include "vcar/core/gaussian_scene.hpp"
+#include "vcar/core/image.hpp"
+#include "vcar/core/rle_mask.hpp"
+
+namespace vcar {
+
+// What the progress callback sees: the stage, and within a segmentation round the view.
+struct Progress {
+  std::string_view stage;
+  std::size_t view = 0, views = 0;
+  double elapsed_s = 0;
+};
+// Called between stages and between views; returning false cancels (vcar::Cancelled).
+using ProgressCallback = std::function<bool(const Progress&)>;
+
+struct Cancelled : Error {
+  explicit Cancelled(const std::string& stage) : Error("cancelled by the caller", stage) {}
+};
+
+struct Diagnostics {
+  std::size_t n_scene = 0;          // Gaussians in the scene
+  std::size_t n_coarse = 0;         // |G_coarse|
+  std::size_t n_fine = 0;           // |G_fine| (= n_coarse when SSS did not run)
+  std::size_t n_final = 0;          // selected after ABR (ABR changes scales, not membership)
+  std::size_t valid_cameras = 0;    // |V_valid| (A.1)
+  double max_gap_deg = 0;           // Delta_max (Eq. 6)
+  Eigen::Vector3f gap_direction = Eigen::Vector3f::Zero();
+  bool sss_triggered = false;
+  std::vector<Camera> sampled_cameras;  // V_sampled
+  ObjectSphere sphere{};
+  std::size_t abr_flagged = 0, abr_compressed = 0;
+  std::size_t masks_missing = 0;    // frames the segmenter answered with "no mask"
+  std::size_t mask_store_bytes = 0; // run-length bytes held for ABR
+  std::string note;                 // why the pipeline stopped early, if it did
+  std::vector<std::pair<std::string, double>> timings_s;  // stage -> seconds, in order
+};
+
+struct SegmentationResult {
+  std::vector<Index> indices;  // G*, ascending scene indices
+  std::vector<float> scores;   // R_i of the last vote, aligned with indices
+  LogScales log_scale;         // refined log-scales, aligned with indices
+  Diagnostics diagnostics;
+};
+
+namespace detail {
+
+using Clock = std::chrono::steady_clock;
+inline double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// Frame order of a round: the reference view first (CONVENTIONS 4), then the other training
+// views in their order, then the sampled views.
+inline std::vector<std::size_t> training_order(std::size_t n, std::size_t reference) {
+  std::vector<std::size_t> order{reference};
+  for (std::size_t j = 0; j < n; ++j)
+    if (j != reference) order.push_back(j);
+  return order;
+}
+
+struct RoundTimes {
+  double render = 0, voting = 0, total = 0;
+};
+
+// One segmentation round: renders frames on demand from `subset` (null = whole scene), streams
+// each mask into `on_mask(frame, mask)`, validates sizes, maps segmenter failures to errors.
+template <Renderer R, Segmenter S, class OnMask>
+RoundTimes run_round(std::string_view round, const GaussianScene& scene,
+                     const std::vector<Index>* subset, std::span<const Camera> frames,
+                     const Prompt& prompt, R& renderer, S& segmenter, const VcarParams& params,
+                     const ProgressCallback& progress, Clock::time_point t_start, OnMask&& on_mask,
+                     std::size_t& masks_missing) {
+  RoundTimes t;
+  const auto t0 = Clock::now();
+  std::vector<bool> seen(frames.size(), false);
+  FrameSequence seq;
+  seq.cameras = frames;
+  seq.image = [&](std::size_t k) -> ImageRGB8 {
+    if (k >= frames.size()) throw Error("frame " + std::to_string(k) + " out of range", std::string(round));
+    const auto tr = Clock::now();
+    RenderRequest q;
+    q.scene = &scene;
+    q.camera = &frames[k];
+    q.subset = subset;
+    q.background = params.background;
+    ImageRGB8 img = to_8bit(renderer.render(q).rgb);
+    t.render += seconds_since(tr);
+    return img;
+  };
+  MaskSink sink = [&](std::size_t k, const Mask* m) {
+    if (k >= frames.size())
+      throw Error("segmenter answered frame " + std::to_string(k) + " of " +
+                      std::to_string(frames.size()), std::string(round));
+    const Camera& cam = frames[k];
+    if (seen[k]) throw Error("segmenter answered a frame twice", std::string(round) + ", view '" + cam.name + "'");
+    seen[k] = true;
+    if (m && (m->width != cam.width || m->height != cam.height || m->channels != 1))
+      throw Error("mask is " + std::to_string(m->width) + "x" + std::to_string(m->height) + "x" +
+                      std::to_string(m->channels) + ", the view is " + std::to_string(cam.width) +
+                      "x" + std::to_string(cam.height) + "x1",
+                  std::string(round) + ", view '" + cam.name + "'");
+    if (!m) ++masks_missing;
+    const auto tv = Clock::now();
+    on_mask(k, m);
+    t.voting += seconds_since(tv);
+    if (progress && !progress({round, k + 1, frames.size(), seconds_since(t_start)}))
+      throw Cancelled(std::string(round));
+  };
+  try {
+    segmenter.segment(seq, prompt, sink);
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw Error(std::string("segmenter failed: ") + e.what(), std::string(round));
+  }
+  for (std::size_t k = 0; k < frames.size(); ++k)
+    if (!seen[k]) ++masks_missing;
+  t.total = seconds_since(t0);
+  return t;
+}
+
+// Fraction of a view's pixels that the Gaussians `subset` cover (alpha > 0.5).
+template <Renderer R>
+double content_fraction(const GaussianScene& scene, const std::vector<Index>& subset, const Camera& cam, R& renderer) {
+  RenderRequest q;
+  q.scene = &scene;
+  q.camera = &cam;
+  q.subset = &subset;
+  const RenderOutput out = renderer.render(q);
+  std::size_t covered = 0;
+  for (float a : out.alpha.data) covered += a > 0.5f;
+  return out.alpha.data.empty() ? 0.0 : static_cast<double>(covered) / static_cast<double>(out.alpha.data.size());
+}
+
+inline AbrParams abr_params(const VcarParams& p) {
+  AbrParams a;
+  a.sigma_c = p.sigma_c;
+  a.rho = p.rho;
+  a.f_min = p.f_min;
+  a.boundary_samples = p.boundary_samples;
+  a.reference_code_rules = p.abr_variant == AbrVariant::ReferenceCode;
+  return a;
+}
+
+// One vote of one view; with occlusion_aware (beyond the paper) the view's expected depth is
+// rendered from the same Gaussians the segmenter saw.
+template <Renderer R>
+void vote(VisibilityVoting& voting, const Camera& cam, const Mask* m, const GaussianScene& scene,
+          const std::vector<Index>* subset, R& renderer, const VcarParams& params) {
+  if (!params.occlusion_aware || !m) {
+    voting.add_view(cam, m);
+    return;
+  }
+  RenderRequest q;
+  q.scene = &scene;
+  q.camera = &cam;
+  q.subset = subset;
+  q.want_depth = true;
+  const RenderOutput out = renderer.render(q);
+  if (out.depth.empty())
+    throw Error("occlusion_aware needs a renderer that returns depth", "view '" + cam.name + "'");
+  voting.add_view(cam, m, &out.depth, &out.alpha, params.depth_tolerance);
+}
+
+}  // namespace detail
+
+// Segments the object prompted on train_cameras[prompt.reference_view].
+// Throws vcar::Error for bad input (empty scene, no cameras, reference view out of range,
+// invalid parameters, a failing segmenter or a wrong-size mask, naming the view) and
+// vcar::Cancelled when `progress` returns false. An object that no view selects is not an
+// error: the result is empty and diagnostics.note says why.
+template <Renderer R, Segmenter S>
+SegmentationResult segment(const GaussianScene& scene, const std::vector<Camera>& train_cameras,
+                           const Prompt& prompt, R& renderer, S& segmenter,
+                           const VcarParams& params, const ProgressCallback& progress = {}) {
+  using detail::Clock;
+  using detail::seconds_since;
+  params.validate();
+  if (scene.empty()) throw Error("the scene has no Gaussians", "scene");
+  if (train_cameras.empty()) throw Error("no training cameras", "cameras");
+  if (prompt.reference_view >= train_cameras.size())
+    throw Error("reference view " + std::to_string(prompt.reference_view) + " out of range (" +
+                    std::to_string(train_cameras.size()) + " training views)", "prompt");
+  for (const Camera& c : train_cameras) c.validate();
+
+  const auto t_start = Clock::now();
+  SegmentationResult result;
+  Diagnostics& diag = result.diagnostics;
+  diag.n_scene = scene.size();
+  auto stage = [&](std::string_view name) {
+    if (progress && !progress({name, 0, 0, seconds_since(t_start)})) throw Cancelled(std::string(name));
+  };
+  auto timing = [&](std::string name, double s) { diag.timings_s.emplace_back(std::move(name), s); };
+
+  const std::size_t M = train_cameras.size();
+  const std::size_t ref = prompt.reference_view;
+  const std::vector<std::size_t> order = detail::training_order(M, ref);
+  std::vector<Camera> frames;
+  for (std::size_t j : order) frames.push_back(train_cameras[j]);
+
+  // Masks of the training views from the latest round, for ABR (B.3), run-length encoded.
+  std::vector<std::optional<RleMask>> train_masks(M);
+  auto keep_training_mask = [&](std::size_t k, const Mask* m) {
+    if (k < M) train_masks[order[k]] = m && params.enable_abr ? std::optional<RleMask>(RleMask::encode(*m)) : std::nullopt;
+  };
+  auto usable = [&](const Mask* m) -> const Mask* {
+    if (!m || !(params.min_mask_fraction > 0.f)) return m;  // CONVENTIONS 7: the code drops tiny masks
+    std::size_t fg = 0;
+    for (std::uint8_t v : m->data) fg += v != 0;
+    return static_cast<double>(fg) > params.min_mask_fraction * static_cast<double>(m->pixels()) ? m : nullptr;
+  };
+
+  // ---- Stage 1: coarse VWV on the training views, rendered from the whole scene (Eq. 1-3).
+  stage("coarse");
+  VisibilityVoting coarse(scene);
+  const detail::RoundTimes t1 = detail::run_round(
+      "coarse round", scene, nullptr, frames, prompt, renderer, segmenter, params, progress,
+      t_start, [&](std::size_t k, const Mask* m) {
+        m = usable(m);
+        detail::vote(coarse, frames[k], m, scene, nullptr, renderer, params);
+        keep_training_mask(k, m);
+      }, diag.masks_missing);
+  timing("coarse_render", t1.render);
+  timing("coarse_segment", t1.total - t1.render - t1.voting);
+  timing("coarse_voting", t1.voting);
+  std::vector<Index> selected = coarse.selected(params.tau_coarse);
+  auto scores_of = [](const VisibilityVoting& v, const std::vector<Index>& sel) {
+    std::vector<float> s;
+    s.reserve(sel.size());
+    for (Index i : sel) s.push_back(v.ratio_of(i));
+    return s;
+  };
+  std::vector<float> scores = scores_of(coarse, selected);
+  diag.n_coarse = diag.n_fine = diag.n_final = selected.size();
+  if (selected.empty()) {
+    diag.note = "the coarse stage selected no Gaussian (no training view shows the target, or every mask is empty)";
+    timing("total", seconds_since(t_start));
+    return result;
+  }
+
+  // ---- Stage 2: sphere (Eq. 4-5), view completeness (Eq. 6), SSS (Eq. 7-8), fine VWV.
+  stage("view_completeness");
+  auto tv = Clock::now();
+  diag.sphere = robust_sphere(scene, selected, train_cameras[ref].position(), params.eta);
+  const auto valid = valid_cameras(scene, selected, train_cameras, params.rho_min);
+  diag.valid_cameras = valid.size();
+  std::vector<Eigen::Vector3f> positions;
+  for (std::size_t j : valid) positions.push_back(train_cameras[j].position());
+  const AngularGap gap = max_angular_gap(fibonacci_lattice(params.K), headings(diag.sphere.c, positions));
+  diag.max_gap_deg = gap.Delta_max_deg;
+  diag.gap_direction = gap.direction;
+  timing("vca", seconds_since(tv));
+
+  diag.sss_triggered = params.enable_sss && (params.force_sss || gap.Delta_max_deg > params.Delta_th_deg);
+  if (diag.sss_triggered) {
+    stage("sss");
+    const Eigen::Vector3f up = estimate_scene_up(train_cameras);
+    const Intrinsics intr = sampled_view_intrinsics(train_cameras[ref], params.sampled_intrinsics, params.sampled_fov_deg);
+    diag.sampled_cameras = params.gap_directed
+        ? gap_directed_cameras(diag.sphere, up, gap.direction, intr, params.gap_directed_views, params.gap_directed_cone_deg)
+        : spiral_cameras(diag.sphere, up, intr, params);
+    const std::vector<Index> coarse_set = selected;
+    std::vector<Camera> fine_frames = frames;
+    for (const Camera& c : diag.sampled_cameras)
+      if (!(params.min_frame_content > 0.f) || detail::content_fraction(scene, coarse_set, c, renderer) >= params.min_frame_content)
+        fine_frames.push_back(c);  // CONVENTIONS 7: the code drops near-empty sampled frames
+    VisibilityVoting fine(scene, coarse_set);
+    for (auto& m : train_masks) m.reset();
+    const detail::RoundTimes t2 = detail::run_round(
+        "fine round", scene, &coarse_set, fine_frames, prompt, renderer, segmenter, params,
+        progress, t_start, [&](std::size_t k, const Mask* m) {
+          m = usable(m);
+          detail::vote(fine, fine_frames[k], m, scene, &coarse_set, renderer, params);
+          keep_training_mask(k, m);
+        }, diag.masks_missing);
+    timing("fine_render", t2.render);
+    timing("fine_segment", t2.total - t2.render - t2.voting);
+    timing("fine_voting", t2.voting);
+    selected = fine.selected(params.tau_fine);
+    scores = scores_of(fine, selected);
+    diag.n_fine = diag.n_final = selected.size();
+    if (selected.empty()) {
+      diag.note = "the fine vote kept no Gaussian (tau_fine too high for these masks?)";
+      timing("total", seconds_since(t_start));
+      return result;
+    }
+  }
+
+  // ---- Stage 3: ABR on the training views with masks from the latest round (Eq. 9-14, B).
+  result.log_scale = {std::vector<float>(selected.size()), std::vector<float>(selected.size()),
+                      std::vector<float>(selected.size())};
+  for (std::size_t k = 0; k < selected.size(); ++k)
+    for (int d = 0; d < 3; ++d) result.log_scale[d][k] = scene.log_scale[d][selected[k]];
+  if (params.enable_abr) {
+    stage("abr");
+    auto ta = Clock::now();
+    BoundaryRefinement abr(scene, selected, detail::abr_params(params));
+    Mask scratch;
+    for (std::size_t j = 0; j < M; ++j) {
+      if (!train_masks[j]) continue;
+      diag.mask_store_bytes += train_masks[j]->bytes();
+      train_masks[j]->decode(scratch);
+      abr.add_view(train_cameras[j], scratch);
+    }
+    AbrResult a = abr.finish();
+    result.log_scale = std::move(a.log_scale);
+    diag.abr_flagged = a.flagged;
+    diag.abr_compressed = a.compressed;
+    timing("abr", seconds_since(ta));
+  }
+  result.indices = std::move(selected);
+  result.scores = std::move(scores);
+  diag.n_final = result.indices.size();
+  timing("total", seconds_since(t_start));
+  stage("done");
+  return result;
+}
+
+}  // namespace vcar

@@ -1,0 +1,270 @@
+// The coarse-to-fine pipeline on small generated scenes with mock renderers and segmenters
+// whose right answer is known by construction.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <random>
+#include <stdexcept>
+
+#include "vcar/algo/pipeline.hpp"
+
+namespace {
+
+constexpr int kW = 160, kH = 120;
+
+// Two blobs of small isotropic Gaussians: A (the target) around (0,0,0), B around (2,0,0).
+struct TwoBlobs {
+  vcar::GaussianScene scene;
+  std::vector<vcar::Index> a, b;
+  static constexpr float radius = 0.3f;
+};
+
+TwoBlobs two_blobs(int per_blob = 300, float log_s = std::log(0.02f)) {
+  TwoBlobs t;
+  t.scene.resize(2 * per_blob);
+  std::mt19937 rng(3);
+  std::normal_distribution<float> n01(0.f, 1.f);
+  for (int i = 0; i < 2 * per_blob; ++i) {
+    Eigen::Vector3f p;
+    do p = {n01(rng), n01(rng), n01(rng)}; while (p.norm() < 1e-3f);
+    p = p.normalized() * TwoBlobs::radius * std::cbrt(std::uniform_real_distribution<float>(0, 1)(rng));
+    const bool in_a = i < per_blob;
+    if (!in_a) p.x() += 2.f;
+    t.scene.set(i, p, Eigen::Vector3f::Constant(log_s), {1, 0, 0, 0}, 2.f);
+    (in_a ? t.a : t.b).push_back(static_cast<vcar::Index>(i));
+  }
+  return t;
+}
+
+vcar::Intrinsics intrinsics() { return {kW, kH, 120.f, 120.f, kW / 2.f, kH / 2.f}; }
+
+// Forward-facing rig: cameras on a small patch at z = -4 looking +z (the back is never seen).
+std::vector<vcar::Camera> forward_rig(int n = 9) {
+  std::vector<vcar::Camera> cams;
+  for (int k = 0; k < n; ++k) {
+    const float dx = 0.3f * static_cast<float>(k % 3 - 1), dy = 0.3f * static_cast<float>(k / 3 - 1);
+    cams.push_back(vcar::Camera::look_at({1.f + dx, dy, -4.f}, {1.f + dx, dy, 0.f}, {0, -1, 0},
+                                         intrinsics(), "train_" + std::to_string(k)));
+  }
+  return cams;
+}
+
+// 360 rig: a ring of cameras around the origin (in the y = 0 plane, up = -y).
+std::vector<vcar::Camera> orbit_rig(int n = 16) {
+  std::vector<vcar::Camera> cams;
+  for (int k = 0; k < n; ++k) {
+    const float a = 2.f * static_cast<float>(M_PI) * static_cast<float>(k) / static_cast<float>(n);
+    const float e = (k % 2 ? 0.6f : -0.6f);
+    cams.push_back(vcar::Camera::look_at({3.f * std::cos(a), 3.f * std::sin(e), 3.f * std::sin(a)},
+                                         {0, 0, 0}, {0, -1, 0}, intrinsics(), "orbit_" + std::to_string(k)));
+  }
+  return cams;
+}
+
+auto blank_renderer() {
+  return vcar::make_renderer([](const vcar::RenderRequest& q) {
+    vcar::RenderOutput out;
+    out.rgb = vcar::ImageF(q.camera->width, q.camera->height, 3, 0.f);
+    out.alpha = vcar::ImageF(q.camera->width, q.camera->height, 1, 0.f);
+    return out;
+  });
+}
+
+// The mask of blob A: the projected disc of its bounding sphere (slightly enlarged).
+vcar::Mask blob_a_mask(const vcar::Camera& c) {
+  vcar::Mask m(c.width, c.height, 1);
+  const Eigen::Vector3f t = c.to_camera({0, 0, 0});
+  if (t.z() <= 0.f) return m;
+  const float u = c.fx * t.x() / t.z() + c.cx, v = c.fy * t.y() / t.z() + c.cy;
+  const float r = c.fx * (TwoBlobs::radius + 0.08f) / t.z();
+  for (int y = 0; y < c.height; ++y)
+    for (int x = 0; x < c.width; ++x)
+      if ((x + 0.5f - u) * (x + 0.5f - u) + (y + 0.5f - v) * (y + 0.5f - v) <= r * r) m(x, y) = 255;
+  return m;
+}
+
+auto disc_segmenter(int* rounds = nullptr) {
+  return vcar::make_segmenter([rounds](const vcar::FrameSequence& f, const vcar::Prompt&) {
+    if (rounds) ++*rounds;
+    std::vector<std::optional<vcar::Mask>> masks;
+    for (const auto& c : f.cameras) masks.emplace_back(blob_a_mask(c));
+    return masks;
+  });
+}
+
+bool same_set(std::vector<vcar::Index> got, std::vector<vcar::Index> want) {
+  std::sort(want.begin(), want.end());
+  return got == want;
+}
+
+}  // namespace
+
+TEST_CASE("pipeline selects blob A from a forward-facing rig and runs SSS") {
+  auto w = two_blobs();
+  const auto cams = forward_rig();
+  auto renderer = blank_renderer();
+  int rounds = 0;
+  auto seg = disc_segmenter(&rounds);
+  vcar::Prompt prompt;
+  prompt.reference_view = 4;
+  std::vector<std::string> stages;
+  const auto r = vcar::segment(w.scene, cams, prompt, renderer, seg, vcar::VcarParams::nvos(),
+                               [&](const vcar::Progress& p) {
+                                 if (p.views == 0) stages.emplace_back(p.stage);
+                                 return true;
+                               });
+  const auto& d = r.diagnostics;
+  CHECK(d.max_gap_deg > 90.0);          // the back of the object is never seen
+  CHECK(d.sss_triggered);
+  CHECK(d.sampled_cameras.size() == 32);  // S1 x S2
+  CHECK(rounds == 2);
+  CHECK(same_set(r.indices, w.a));
+  CHECK(r.scores.size() == r.indices.size());
+  CHECK(r.log_scale[0].size() == r.indices.size());
+  CHECK(d.n_coarse == w.a.size());
+  CHECK(std::is_sorted(r.indices.begin(), r.indices.end()));
+  CHECK(stages.front() == "coarse");
+  CHECK(std::find(stages.begin(), stages.end(), "sss") != stages.end());
+  // The sphere centre is blob A's centre, its radius eta times the reference distance.
+  CHECK(d.sphere.c.norm() < 0.05f);
+  CHECK(d.sphere.r == Approx(1.2f * (cams[4].position() - d.sphere.c).norm()).epsilon(1e-4));
+}
+
+TEST_CASE("pipeline skips SSS when the training views surround the object") {
+  auto w = two_blobs();
+  const auto cams = orbit_rig();
+  auto renderer = blank_renderer();
+  int rounds = 0;
+  auto seg = disc_segmenter(&rounds);
+  const auto r = vcar::segment(w.scene, cams, {}, renderer, seg, vcar::VcarParams::nvos());
+  CHECK(r.diagnostics.max_gap_deg < 90.0);
+  CHECK_FALSE(r.diagnostics.sss_triggered);
+  CHECK(rounds == 1);
+  CHECK(same_set(r.indices, w.a));
+}
+
+TEST_CASE("pipeline stages can be switched off") {
+  auto w = two_blobs();
+  const auto cams = forward_rig();
+  auto renderer = blank_renderer();
+  int rounds = 0;
+  auto seg = disc_segmenter(&rounds);
+  auto p = vcar::VcarParams::nvos();
+  p.enable_sss = false;
+  p.enable_abr = false;
+  const auto r = vcar::segment(w.scene, cams, {}, renderer, seg, p);
+  CHECK(rounds == 1);
+  CHECK_FALSE(r.diagnostics.sss_triggered);
+  CHECK(r.diagnostics.abr_flagged == 0);
+  for (std::size_t k = 0; k < r.indices.size(); ++k)  // scales untouched without ABR
+    CHECK(r.log_scale[0][k] == w.scene.log_scale[0][r.indices[k]]);
+}
+
+TEST_CASE("pipeline: bad input and edge cases") {
+  auto w = two_blobs(100);
+  const auto cams = forward_rig();
+  auto renderer = blank_renderer();
+  auto seg = disc_segmenter();
+  const auto P = vcar::VcarParams::nvos();
+
+  SECTION("empty scene is an error") {
+    vcar::GaussianScene empty;
+    CHECK_THROWS_AS(vcar::segment(empty, cams, {}, renderer, seg, P), vcar::Error);
+  }
+  SECTION("no cameras, or a reference view out of range") {
+    CHECK_THROWS_AS(vcar::segment(w.scene, {}, {}, renderer, seg, P), vcar::Error);
+    vcar::Prompt pr;
+    pr.reference_view = cams.size();
+    CHECK_THROWS_WITH(vcar::segment(w.scene, cams, pr, renderer, seg, P), Catch::Contains("reference view"));
+  }
+  SECTION("all masks empty: a clear empty result, not a crash") {
+    auto none = vcar::make_segmenter([](const vcar::FrameSequence& f, const vcar::Prompt&) {
+      std::vector<std::optional<vcar::Mask>> m;
+      for (auto& c : f.cameras) m.emplace_back(vcar::Mask(c.width, c.height, 1));
+      return m;
+    });
+    const auto r = vcar::segment(w.scene, cams, {}, renderer, none, P);
+    CHECK(r.indices.empty());
+    CHECK_FALSE(r.diagnostics.note.empty());
+  }
+  SECTION("no training view sees the object") {
+    std::vector<vcar::Camera> away;
+    for (auto c : cams) {  // turned around: everything is behind them
+      away.push_back(vcar::Camera::look_at(c.position(), c.position() - Eigen::Vector3f(0, 0, 1), {0, -1, 0}, intrinsics(), c.name));
+    }
+    const auto r = vcar::segment(w.scene, away, {}, renderer, seg, P);
+    CHECK(r.indices.empty());
+    CHECK(r.diagnostics.n_coarse == 0);
+  }
+  SECTION("all masks full: every Gaussian seen by a view is selected") {
+    auto full = vcar::make_segmenter([](const vcar::FrameSequence& f, const vcar::Prompt&) {
+      std::vector<std::optional<vcar::Mask>> m;
+      for (auto& c : f.cameras) m.emplace_back(vcar::Mask(c.width, c.height, 1, 255));
+      return m;
+    });
+    auto p = P;
+    p.enable_sss = false;
+    const auto r = vcar::segment(w.scene, cams, {}, renderer, full, p);
+    CHECK(r.indices.size() == w.scene.size());
+  }
+  SECTION("a single training view") {
+    const std::vector<vcar::Camera> one{cams[4]};
+    const auto r = vcar::segment(w.scene, one, {}, renderer, seg, P);
+    CHECK(same_set(r.indices, w.a));
+    CHECK(r.diagnostics.max_gap_deg > 90.0);
+  }
+  SECTION("duplicate cameras change nothing") {
+    std::vector<vcar::Camera> dup = cams;
+    dup.insert(dup.end(), cams.begin(), cams.end());
+    auto p = P;
+    p.enable_sss = false;
+    const auto r1 = vcar::segment(w.scene, cams, {}, renderer, seg, p);
+    const auto r2 = vcar::segment(w.scene, dup, {}, renderer, seg, p);
+    CHECK(r1.indices == r2.indices);
+  }
+  SECTION("reference camera at the object centre") {
+    std::vector<vcar::Camera> c2 = cams;
+    c2[0] = vcar::Camera::look_at({0, 0, 0}, {0, 0, 1}, {0, -1, 0}, intrinsics(), "inside");
+    vcar::Prompt pr;
+    pr.reference_view = 0;
+    auto p = P;
+    p.force_sss = true;
+    // Either a documented fallback radius or a clear error, never a crash or a NaN.
+    try {
+      const auto r = vcar::segment(w.scene, c2, pr, renderer, seg, p);
+      CHECK(std::isfinite(r.diagnostics.sphere.r));
+      CHECK(r.diagnostics.sphere.r > 0.f);
+    } catch (const vcar::Error& e) {
+      CHECK(std::string(e.what()).size() > 0);
+    }
+  }
+  SECTION("Gaussians with zero or huge scales") {
+    auto z = two_blobs(100, -30.f);
+    for (vcar::Index i : z.a) if (i % 7 == 0) for (int d = 0; d < 3; ++d) z.scene.log_scale[d][i] = 8.f;
+    const auto r = vcar::segment(z.scene, cams, {}, renderer, seg, P);
+    for (auto& col : r.log_scale) for (float v : col) CHECK(std::isfinite(v));
+    CHECK(r.indices.size() >= z.a.size() * 8 / 10);
+  }
+  SECTION("a segmenter that throws is named by round") {
+    auto bad = vcar::make_segmenter([](const vcar::FrameSequence&, const vcar::Prompt&) -> std::vector<std::optional<vcar::Mask>> {
+      throw std::runtime_error("model weights missing");
+    });
+    CHECK_THROWS_WITH(vcar::segment(w.scene, cams, {}, renderer, bad, P),
+                      Catch::Contains("coarse round") && Catch::Contains("model weights missing"));
+  }
+  SECTION("a wrong-size mask names the view") {
+    auto small = vcar::make_segmenter([](const vcar::FrameSequence& f, const vcar::Prompt&) {
+      std::vector<std::optional<vcar::Mask>> m(f.size());
+      m[1] = vcar::Mask(10, 10, 1);
+      return m;
+    });
+    CHECK_THROWS_WITH(vcar::segment(w.scene, cams, {}, renderer, small, P),
+                      Catch::Contains("train_1") && Catch::Contains("10x10"));
+  }
+  SECTION("the progress callback cancels") {
+    int calls = 0;
+    CHECK_THROWS_AS(vcar::segment(w.scene, cams, {}, renderer, seg, P,
+                                  [&](const vcar::Progress&) { return ++calls < 3; }),
+                    vcar::Cancelled);
+  }
+}
