@@ -1,0 +1,306 @@
+#pragma once
+// Axis-aware Boundary Refinement, ABR (Sec. 3.4, Eq. 9-14; supplementary B.1-B.3).
+//
+// A streaming accumulator over a candidate set (typically G_fine): every training view with a
+// mask from the latest segmentation round is added once (CONVENTIONS 5); `finish` applies the
+// gated, reconciled per-axis compression. Per candidate the state is O(1) in the number of views:
+// n_vis, n_ovf (uint16) and the running minimum candidate factor of each of the 3 axes.
+//
+// Rules where the paper leaves room (each is tested):
+//  (a) Eq. 13 numerator (l/sigma_c)^2 - lambda + w_{d*} <= 0: the other axes (and eps2d) already
+//      exceed the boundary, no factor in [f_min, 1] reaches it, the candidate is f_min (B.3).
+//  (b) An observation is eligible (n_vis) only when the projected centre is inside the image and
+//      on the mask foreground (B.1); a centre on background contributes nothing.
+//  (c) w_{d*} == 0 (every axis projects to a point along u; lambda is eps2d only): no candidate.
+//  (d) eps2d (CONVENTIONS 3) is owned by no axis: lambda = sum_d w_d + eps2d u^T u, so it stays in
+//      lambda - w_{d*} of Eq. 13.
+//  (e) Geometry only: the projection is called with opacity 1 (ABR reads mean, scale, rotation);
+//      a centre behind the near plane or beyond the far plane is not eligible.
+//  (f) d* ties go to the lowest axis index.
+//  (g) Candidates are processed internally in Morton order of their means (cache locality of
+//      the mask lookups); every output stays aligned with the candidates as given.
+// `reference_code_rules` (CONVENTIONS 7) switches to the released code: a candidate only when
+// (l/sigma_c)^2 < lambda, and the dominant share of lambda is lambda w_{d*} / sum_d w_d (eps2d
+// spread over the axes in proportion) in place of w_{d*}.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "vcar/algo/boundary_distance.hpp"
+#include "vcar/core/camera.hpp"
+#include "vcar/core/error.hpp"
+#include "vcar/core/gaussian_scene.hpp"
+#include "vcar/core/image.hpp"
+#include "vcar/core/parallel.hpp"
+#include "vcar/core/projection.hpp"
+#include "vcar/core/rotation.hpp"
+
+namespace vcar {
+
+struct AbrParams {
+  float sigma_c = 3.f;           // ellipse cutoff in standard deviations (Eq. 9), default 3
+  float rho = 0.6f;              // overflow-ratio gate, update when gamma > rho (B.3), default 0.6
+  float f_min = 0.1f;            // lower bound of the compression factor (Eq. 13, B.3), default 0.1
+  int boundary_samples = 129;    // samples from centre to endpoint for l_u (B.3), default 129
+  bool reference_code_rules = false;  // CONVENTIONS 7: the released code's compression rules
+  ProjectionParams projection;   // near/far plane, eps2d, Jacobian clamp (CONVENTIONS 3)
+
+  // Throws vcar::Error naming the parameter out of range.
+  void validate() const {
+    const std::string where = "AbrParams";
+    if (!(sigma_c > 0.f) || !std::isfinite(sigma_c)) throw Error("sigma_c must be positive", where + ".sigma_c");
+    if (!(rho >= 0.f && rho < 1.f)) throw Error("rho must be in [0, 1)", where + ".rho");
+    if (!(f_min > 0.f && f_min <= 1.f)) throw Error("f_min must be in (0, 1]", where + ".f_min");
+    if (boundary_samples < 2) throw Error("boundary_samples must be at least 2", where + ".boundary_samples");
+    if (!(projection.eps2d >= 0.f)) throw Error("eps2d must be non-negative", where + ".projection.eps2d");
+  }
+};
+
+struct AbrResult {
+  LogScales log_scale;           // refined log-scales, aligned with the candidates
+  std::size_t flagged = 0;       // candidates with gamma = n_ovf / n_vis > rho
+  std::size_t compressed = 0;    // flagged candidates with at least one axis scaled by f < 1
+  std::vector<std::uint8_t> axis_compressed;  // bit d set: axis d of candidate k was compressed
+};
+
+// Eigen-decomposition of a symmetric 2x2 matrix, lambda1 >= lambda2, unit e1 _|_ e2 (Eq. 9).
+struct SymmetricEigen2 {
+  float lambda1 = 0, lambda2 = 0;
+  Eigen::Vector2f e1{1, 0}, e2{0, 1};
+};
+
+// Closed form: lambda = mean +- sqrt(diff^2 + b^2); e1 from the row of (S - lambda1 I) that is
+// better conditioned; an isotropic matrix gets the image axes.
+inline SymmetricEigen2 symmetric_eigen2(const Eigen::Matrix2f& S) {
+  const float a = S(0, 0), b = S(0, 1), c = S(1, 1);
+  const float mean = 0.5f * (a + c), diff = 0.5f * (a - c);
+  const float r = std::sqrt(diff * diff + b * b);
+  SymmetricEigen2 E;
+  E.lambda1 = mean + r;
+  E.lambda2 = mean - r;
+  Eigen::Vector2f v = diff >= 0.f ? Eigen::Vector2f(diff + r, b) : Eigen::Vector2f(b, r - diff);
+  const float n2 = v.squaredNorm();
+  if (n2 > 0.f) {
+    E.e1 = v / std::sqrt(n2);
+    E.e2 = {-E.e1.y(), E.e1.x()};
+  }
+  return E;
+}
+
+// Eq. 11: w_d = s_d^2 (u^T q_d)^2, the variance that axis d contributes along unit u.
+inline std::array<float, 3> axis_contributions(const std::array<Eigen::Vector2f, 3>& q,
+                                               const Eigen::Vector3f& s, const Eigen::Vector2f& u) {
+  std::array<float, 3> w{};
+  for (int d = 0; d < 3; ++d) {
+    const float uq = u.dot(q[d]);
+    w[d] = s[d] * s[d] * uq * uq;
+  }
+  return w;
+}
+
+// Eq. 13 with the B.3 rules (a), (c) above, or the reference-code rules: the candidate factor of
+// the dominant axis for one overflowing endpoint, unclamped above; +inf means "no candidate".
+inline float compression_factor(float l_u, float lambda, const std::array<float, 3>& w, int d_star,
+                                const AbrParams& p) {
+  const float target = (l_u / p.sigma_c) * (l_u / p.sigma_c);  // (l_u / sigma_c)^2, px^2
+  float w_star = w[d_star];
+  if (!(w_star > 0.f)) return std::numeric_limits<float>::infinity();  // rule (c)
+  if (p.reference_code_rules) {
+    if (!(target < lambda)) return std::numeric_limits<float>::infinity();
+    w_star = lambda * w_star / (w[0] + w[1] + w[2]);  // dominant share of lambda
+  }
+  const float numerator = target - lambda + w_star;  // Eq. 13
+  if (!(numerator > 0.f)) return p.f_min;            // rule (a)
+  return std::sqrt(numerator / w_star);              // Eq. 13
+}
+
+// What one view says about one Gaussian (B.1-B.3).
+struct AbrObservation {
+  bool eligible = false;  // centre projected inside the image and on foreground (B.1)
+  bool overflow = false;  // some endpoint outside the image or on background (B.1)
+  // Smallest candidate factor per axis over this view's overflowing endpoints; +inf: none.
+  std::array<float, 3> f{std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
+                         std::numeric_limits<float>::infinity()};
+};
+
+// One Gaussian (mean mu, rotation R with columns r_d, scales s) in one view with its mask.
+// Assumes mask is camera-sized (checked where views enter, BoundaryRefinement::add_view).
+inline AbrObservation observe_gaussian(const Camera& cam, const Mask& mask, const Eigen::Vector3f& mu,
+                                       const Eigen::Matrix3f& R, const Eigen::Vector3f& s,
+                                       const AbrParams& p) {
+  AbrObservation obs;
+  // Eligibility first (rule (b), B.1): most Gaussian-views that fail it skip the covariance.
+  const Eigen::Vector3f t = cam.to_camera(mu);
+  if (!(t.z() >= p.projection.near_plane && t.z() <= p.projection.far_plane)) return obs;
+  if (!mask_at(mask, cam.fx * t.x() / t.z() + cam.cx, cam.fy * t.y() / t.z() + cam.cy)) return obs;
+  const ProjectedGaussian g = project_gaussian(cam, mu, R, s, 1.f, p.projection);  // rule (e)
+  if (!g.valid || !mask_at(mask, g.mean.x(), g.mean.y())) return obs;  // same m, Sigma2D degenerate
+  obs.eligible = true;
+  const SymmetricEigen2 E = symmetric_eigen2(g.Sigma2D);
+  const float lambdas[2] = {std::max(E.lambda1, 0.f), std::max(E.lambda2, 0.f)};
+  const Eigen::Vector2f axes[2] = {E.e1, E.e2};
+  for (int k = 0; k < 4; ++k) {  // endpoints m +- a e1, m +- b e2 (Eq. 9)
+    const float lambda = lambdas[k >> 1];
+    const Eigen::Vector2f u = (k & 1) ? Eigen::Vector2f(-axes[k >> 1]) : axes[k >> 1];
+    const float L = p.sigma_c * std::sqrt(lambda);  // a or b
+    if (mask_at(mask, g.mean.x() + L * u.x(), g.mean.y() + L * u.y())) continue;
+    obs.overflow = true;
+    const std::array<float, 3> w = axis_contributions(g.q, s, u);  // Eq. 11
+    const int d_star = w[1] > w[0] ? (w[2] > w[1] ? 2 : 1) : (w[2] > w[0] ? 2 : 0);  // d* = argmax w_d (Eq. 11)
+    const float l_u = boundary_distance(mask, g.mean, u, L, p.boundary_samples);  // B.3
+    const float f = compression_factor(l_u, lambda, w, d_star, p);  // Eq. 13
+    obs.f[d_star] = std::min(obs.f[d_star], f);
+  }
+  return obs;
+}
+
+class BoundaryRefinement {
+ public:
+  // Copies the candidates' means, rotations and log-scales (the scene need not outlive this), in
+  // Morton order of the means so that neighbouring work reads neighbouring mask pixels.
+  // Throws vcar::Error for a candidate index out of range or a parameter out of range.
+  BoundaryRefinement(const GaussianScene& scene, std::vector<Index> candidates, AbrParams params = {})
+      : candidates_(std::move(candidates)), params_(params) {
+    params_.validate();
+    const std::size_t n = candidates_.size();
+    for (std::size_t k = 0; k < n; ++k)
+      if (candidates_[k] >= scene.size())
+        throw Error("candidate " + std::to_string(candidates_[k]) + " out of range (scene has " +
+                    std::to_string(scene.size()) + " Gaussians)", "BoundaryRefinement");
+    const std::vector<std::uint32_t> order = morton_order(scene);
+    slot_.resize(n);
+    for (auto& c : mu_) c.resize(n);
+    for (auto& c : q_) c.resize(n);
+    for (auto& c : log_s_) c.resize(n);
+    for (auto& c : f_) c.assign(n, std::numeric_limits<float>::infinity());
+    n_vis_.assign(n, 0);
+    n_ovf_.assign(n, 0);
+    for (std::size_t j = 0; j < n; ++j) {  // internal slot j holds candidate order[j]
+      const std::size_t i = candidates_[order[j]];
+      slot_[order[j]] = static_cast<std::uint32_t>(j);
+      for (int d = 0; d < 3; ++d) { mu_[d][j] = scene.mean[d][i]; log_s_[d][j] = scene.log_scale[d][i]; }
+      for (int c = 0; c < 4; ++c) q_[c][j] = scene.rotation[c][i];
+    }
+  }
+
+  // One training view with its mask (B.3). Throws vcar::Error naming the view for a bad camera,
+  // a mask of another size than the view, or more views than the uint16 counters hold.
+  void add_view(const Camera& cam, const Mask& mask) {
+    const std::string where = "view '" + cam.name + "'";
+    cam.validate();
+    if (mask.width != cam.width || mask.height != cam.height || mask.channels != 1 ||
+        mask.data.size() != mask.pixels())
+      throw Error("mask is " + std::to_string(mask.width) + "x" + std::to_string(mask.height) + "x" +
+                  std::to_string(mask.channels) + ", the view is " + std::to_string(cam.width) + "x" +
+                  std::to_string(cam.height) + "x1", where);
+    if (views_ == std::numeric_limits<std::uint16_t>::max())
+      throw Error("more than 65535 views for ABR", where);
+    ++views_;
+    const AbrParams p = params_;
+    parallel_chunks(static_cast<std::int64_t>(size()), kChunk, [&](std::int64_t, std::int64_t b, std::int64_t e) {
+      for (std::int64_t k = b; k < e; ++k) {
+        const Eigen::Vector3f mu(mu_[0][k], mu_[1][k], mu_[2][k]);
+        const Eigen::Matrix3f R = rotation_from_quaternion(q_[0][k], q_[1][k], q_[2][k], q_[3][k]);
+        const Eigen::Vector3f s(std::exp(log_s_[0][k]), std::exp(log_s_[1][k]), std::exp(log_s_[2][k]));
+        const AbrObservation obs = observe_gaussian(cam, mask, mu, R, s, p);
+        if (!obs.eligible) continue;
+        ++n_vis_[k];
+        if (!obs.overflow) continue;
+        ++n_ovf_[k];
+        for (int d = 0; d < 3; ++d) f_[d][k] = std::min(f_[d][k], obs.f[d]);  // multi-view min (B.3)
+      }
+    });
+  }
+
+  // Gate gamma > rho (strict), clamp the per-axis minimum to [f_min, 1], log s_d += log f (Eq. 14).
+  AbrResult finish() const {
+    const std::size_t n = size();
+    AbrResult r;
+    r.log_scale = {std::vector<float>(n), std::vector<float>(n), std::vector<float>(n)};
+    r.axis_compressed.assign(n, 0);
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t j = slot_[k];
+      for (int d = 0; d < 3; ++d) r.log_scale[d][k] = log_s_[d][j];
+      if (n_vis_[j] == 0) continue;
+      const float gamma = static_cast<float>(n_ovf_[j]) / static_cast<float>(n_vis_[j]);  // B.3
+      if (!(gamma > params_.rho)) continue;
+      ++r.flagged;
+      for (int d = 0; d < 3; ++d) {
+        const float f = std::min(1.f, std::max(params_.f_min, f_[d][j]));  // B.3 reconciliation
+        if (!(f < 1.f)) continue;
+        r.log_scale[d][k] += std::log(f);  // Eq. 14
+        r.axis_compressed[k] |= static_cast<std::uint8_t>(1u << d);
+      }
+      if (r.axis_compressed[k]) ++r.compressed;
+    }
+    return r;
+  }
+
+  std::size_t size() const noexcept { return candidates_.size(); }
+  const std::vector<Index>& candidates() const noexcept { return candidates_; }
+  const AbrParams& params() const noexcept { return params_; }
+  std::size_t views() const noexcept { return views_; }
+  // Diagnostics of candidate k: eligible views, overflowing views, running minimum factor of axis d.
+  std::uint16_t n_vis(std::size_t k) const { return n_vis_[slot_[k]]; }
+  std::uint16_t n_ovf(std::size_t k) const { return n_ovf_[slot_[k]]; }
+  float min_factor(std::size_t k, int d) const { return f_[d][slot_[k]]; }
+
+  // Bytes of state held per candidate (index, geometry copy, counters, running minima).
+  static constexpr std::size_t bytes_per_candidate() {
+    return 2 * sizeof(std::uint32_t) + (3 + 4 + 3) * sizeof(float) + 2 * sizeof(std::uint16_t) + 3 * sizeof(float);
+  }
+
+ private:
+  // Candidate positions sorted by the Morton code of their means (10 bits per axis over the
+  // candidates' bounding box), ties by position: deterministic.
+  std::vector<std::uint32_t> morton_order(const GaussianScene& scene) const {
+    const std::size_t n = candidates_.size();
+    std::array<float, 3> lo{}, hi{};
+    for (int d = 0; d < 3; ++d) { lo[d] = std::numeric_limits<float>::max(); hi[d] = -lo[d]; }
+    for (std::size_t k = 0; k < n; ++k)
+      for (int d = 0; d < 3; ++d) {
+        lo[d] = std::min(lo[d], scene.mean[d][candidates_[k]]);
+        hi[d] = std::max(hi[d], scene.mean[d][candidates_[k]]);
+      }
+    auto spread = [](std::uint64_t v) {  // 10 bits -> every third bit
+      v = (v | (v << 16)) & 0x030000FFull;
+      v = (v | (v << 8)) & 0x0300F00Full;
+      v = (v | (v << 4)) & 0x030C30C3ull;
+      v = (v | (v << 2)) & 0x09249249ull;
+      return v;
+    };
+    std::vector<std::uint64_t> key(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      std::uint64_t code = 0;
+      for (int d = 0; d < 3; ++d) {
+        const float ext = hi[d] - lo[d];
+        const float x = ext > 0.f ? (scene.mean[d][candidates_[k]] - lo[d]) / ext : 0.f;
+        code |= spread(static_cast<std::uint64_t>(std::min(1023.f, std::max(0.f, x * 1024.f)))) << d;
+      }
+      key[k] = (code << 32) | k;  // positions < 2^32 (Index is 32-bit)
+    }
+    std::sort(key.begin(), key.end());
+    std::vector<std::uint32_t> order(n);
+    for (std::size_t j = 0; j < n; ++j) order[j] = static_cast<std::uint32_t>(key[j] & 0xFFFFFFFFull);
+    return order;
+  }
+
+  static constexpr std::int64_t kChunk = 2048;
+  std::vector<Index> candidates_;
+  std::vector<std::uint32_t> slot_;          // internal slot of candidate position k
+  AbrParams params_;
+  std::array<std::vector<float>, 3> mu_;     // candidate means
+  std::array<std::vector<float>, 4> q_;      // candidate quaternions (w, x, y, z)
+  LogScales log_s_;                          // candidate log-scales before refinement (by slot)
+  std::array<std::vector<float>, 3> f_;      // running minimum candidate factor per axis
+  std::vector<std::uint16_t> n_vis_, n_ovf_;  // B.3 counts
+  std::size_t views_ = 0;
+};
+
+}  // namespace vcar

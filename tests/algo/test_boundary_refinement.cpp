@@ -1,0 +1,352 @@
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <random>
+#include <string>
+
+#include <Eigen/Eigenvalues>
+
+#include "vcar/algo/boundary_refinement.hpp"
+
+namespace {
+
+// Fronto-parallel camera at the origin looking down +z: fx = fy = 100, 200 x 100 px, principal
+// point off the pixel grid. A Gaussian at (0, 0, 10) projects to m = (cx, cy) with J = diag(10, 10)
+// on the first two axes and a zero third column (tx = ty = 0), so q_d = 10 (x_d, y_d) of r_d.
+constexpr double kFx = 100, kZ = 10, kCx = 100.3, kCy = 50.3, kEps2d = 0.3;
+
+vcar::Camera camera(int w = 200, int h = 100, std::string name = "front") {
+  vcar::Camera c;
+  c.name = std::move(name);
+  c.width = w; c.height = h;
+  c.fx = c.fy = static_cast<float>(kFx);
+  c.cx = static_cast<float>(kCx); c.cy = static_cast<float>(kCy);
+  return c;
+}
+
+// Foreground where col < edge_col: a straight vertical mask edge at u = edge_col.
+vcar::Mask left_of(int edge_col, int w = 200, int h = 100) {
+  vcar::Mask m(w, h, 1, 0);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < std::min(edge_col, w); ++x) m(x, y) = 255;
+  return m;
+}
+
+// One Gaussian at (0, 0, z) with scales s and quaternion q (w, x, y, z).
+vcar::GaussianScene one_gaussian(Eigen::Vector3f s, Eigen::Vector4f q = {1, 0, 0, 0}) {
+  vcar::GaussianScene g;
+  g.resize(1);
+  g.set(0, {0.f, 0.f, static_cast<float>(kZ)}, s.array().log(), q, 5.f);
+  return g;
+}
+
+// Hand computation for the straddling Gaussian: long axis s1 along image u, edge at u = edge.
+// w_1 = s1^2 (fx / z)^2 (Eq. 11), lambda1 = w_1 + eps2d, a = 3 sqrt(lambda1) (Eq. 9),
+// samples t_k = a k / 128, first exit k* = ceil((edge - cx) 128 / a), l = (k* - 1/2) a / 128,
+// f = sqrt(((l/3)^2 - lambda1 + w_1) / w_1) (Eq. 13).
+struct Hand {
+  double w1, lambda, a, l, f;
+};
+Hand hand(double s1, double edge) {
+  Hand h;
+  h.w1 = s1 * s1 * (kFx / kZ) * (kFx / kZ);
+  h.lambda = h.w1 + kEps2d;
+  h.a = 3.0 * std::sqrt(h.lambda);
+  const double k = std::ceil((edge - kCx) * 128.0 / h.a);
+  h.l = (k - 0.5) * h.a / 128.0;
+  const double num = (h.l / 3.0) * (h.l / 3.0) - h.lambda + h.w1;
+  h.f = num > 0 ? std::sqrt(num / h.w1) : -1.0;  // -1: negative numerator
+  return h;
+}
+
+vcar::AbrResult run(const vcar::GaussianScene& g, const std::vector<vcar::Mask>& masks,
+                    vcar::AbrParams p = {}, const vcar::Camera& cam = camera()) {
+  vcar::BoundaryRefinement abr(g, {0}, p);
+  for (const auto& m : masks) abr.add_view(cam, m);
+  return abr.finish();
+}
+
+double factor(const vcar::AbrResult& r, const vcar::GaussianScene& g, int d) {
+  return std::exp(static_cast<double>(r.log_scale[d][0]) - g.log_scale[d][0]);
+}
+
+}  // namespace
+
+TEST_CASE("symmetric_eigen2 matches a brute-force eigen solver") {
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<float> U(-5.f, 5.f);
+  for (int t = 0; t < 500; ++t) {
+    Eigen::Matrix2f A;
+    A << U(rng), U(rng), U(rng), U(rng);
+    Eigen::Matrix2f S = A * A.transpose();
+    if (t % 50 == 0) S = Eigen::Matrix2f::Identity() * 2.f;            // isotropic
+    if (t % 50 == 1) { S(0, 1) = S(1, 0) = 0.f; }                      // diagonal
+    const vcar::SymmetricEigen2 E = vcar::symmetric_eigen2(S);
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> ref(S.cast<double>());
+    const double scale = std::max(1.0, ref.eigenvalues()(1));
+    CHECK(E.lambda1 == Approx(ref.eigenvalues()(1)).margin(1e-5 * scale));
+    CHECK(E.lambda2 == Approx(ref.eigenvalues()(0)).margin(1e-5 * scale));
+    CHECK(E.lambda1 >= E.lambda2);
+    CHECK(E.e1.norm() == Approx(1).epsilon(1e-5));
+    CHECK(E.e1.dot(E.e2) == Approx(0).margin(1e-6));
+    CHECK((S * E.e1 - E.lambda1 * E.e1).norm() <= 1e-4 * scale);
+    CHECK((S * E.e2 - E.lambda2 * E.e2).norm() <= 1e-4 * scale);
+  }
+}
+
+TEST_CASE("Eq. 11: lambda == sum_d w_d + eps2d for random Gaussians and cameras") {
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<float> U(-1.f, 1.f), L(-4.f, -0.5f);
+  const vcar::Intrinsics k{640, 480, 500.f, 520.f, 321.f, 239.f};
+  int checked = 0;
+  for (int t = 0; t < 300; ++t) {
+    const Eigen::Vector3f eye(3 * U(rng), 3 * U(rng), 3 * U(rng) + 5.f);
+    const vcar::Camera cam = vcar::Camera::look_at(eye, {0, 0, 0}, {0, 1, 0}, k);
+    const Eigen::Vector3f mu(U(rng), U(rng), U(rng));
+    const Eigen::Matrix3f R = vcar::rotation_from_quaternion(U(rng), U(rng), U(rng), U(rng) + 0.01f);
+    const Eigen::Vector3f s(std::exp(L(rng)), std::exp(L(rng)), std::exp(L(rng)));
+    const auto g = vcar::project_gaussian(cam, mu, R, s, 1.f);
+    REQUIRE(g.valid);
+    const auto E = vcar::symmetric_eigen2(g.Sigma2D);
+    for (const Eigen::Vector2f& u : {E.e1, E.e2, Eigen::Vector2f(-E.e2)}) {
+      const double lambda = static_cast<double>(u.transpose() * g.Sigma2D * u);
+      const auto w = vcar::axis_contributions(g.q, s, u);
+      // Brute force w_d: project the 3D covariance of axis d alone, s_d^2 r_d r_d^T, onto u.
+      const Eigen::Matrix<float, 2, 3> M = vcar::perspective_jacobian(cam, cam.to_camera(mu)) * cam.R_w;
+      double sum = 0;
+      for (int d = 0; d < 3; ++d) {
+        const Eigen::Matrix3d Sd = (s[d] * s[d] * R.col(d) * R.col(d).transpose()).cast<double>();
+        const double wd = u.cast<double>().dot(M.cast<double>() * Sd * M.cast<double>().transpose() * u.cast<double>());
+        CHECK(w[d] == Approx(wd).margin(1e-5 * lambda + 1e-6));
+        sum += w[d];
+      }
+      CHECK(lambda == Approx(sum + kEps2d).epsilon(1e-4));
+      ++checked;
+    }
+  }
+  CHECK(checked == 900);
+}
+
+TEST_CASE("a Gaussian straddling a vertical mask edge: Eq. 13 by hand, long axis compressed") {
+  const auto g = one_gaussian({0.5f, 0.1f, 1.f});
+  const Hand h = hand(0.5, 110);
+  REQUIRE(h.a == Approx(15.0897).epsilon(1e-4));
+  REQUIRE(h.f > 0.1);
+  REQUIRE(h.f < 1.0);
+  vcar::BoundaryRefinement abr(g, {0});
+  abr.add_view(camera(), left_of(110));
+  CHECK(abr.n_vis(0) == 1);
+  CHECK(abr.n_ovf(0) == 1);
+  const auto r = abr.finish();
+  CHECK(r.flagged == 1);
+  CHECK(r.compressed == 1);
+  CHECK(r.axis_compressed[0] == 0b001);  // axis 0 is long and along the edge normal
+  CHECK(factor(r, g, 0) == Approx(h.f).epsilon(1e-5));
+  CHECK(r.log_scale[1][0] == g.log_scale[1][0]);  // other axes untouched (Eq. 14)
+  CHECK(r.log_scale[2][0] == g.log_scale[2][0]);
+  // After compression the 3-sigma extent along u equals l (the goal of Eq. 13).
+  const double s1 = 0.5 * factor(r, g, 0);
+  CHECK(3.0 * std::sqrt(s1 * s1 * 100.0 + kEps2d) == Approx(h.l).epsilon(1e-5));
+}
+
+TEST_CASE("the dominant axis follows the projection, not the axis index") {
+  // Rotated 90 degrees about z: r_1 = (0, 1, 0) projects on v, r_2 = (-1, 0, 0) on u.
+  const float c = std::sqrt(0.5f);
+  const auto g = one_gaussian({0.1f, 0.5f, 1.f}, {c, 0.f, 0.f, c});
+  const Hand h = hand(0.5, 110);
+  const auto r = run(g, {left_of(110)});
+  CHECK(r.axis_compressed[0] == 0b010);
+  CHECK(factor(r, g, 1) == Approx(h.f).epsilon(1e-5));
+  CHECK(r.log_scale[0][0] == g.log_scale[0][0]);
+  CHECK(r.log_scale[2][0] == g.log_scale[2][0]);
+}
+
+TEST_CASE("two views with different factors: the minimum is taken") {
+  const auto g = one_gaussian({0.5f, 0.1f, 1.f});
+  const Hand h110 = hand(0.5, 110), h108 = hand(0.5, 108);
+  REQUIRE(h108.f < h110.f);
+  REQUIRE(h108.f > 0.1);
+  CHECK(factor(run(g, {left_of(110), left_of(108)}), g, 0) == Approx(h108.f).epsilon(1e-5));
+  CHECK(factor(run(g, {left_of(108), left_of(110)}), g, 0) == Approx(h108.f).epsilon(1e-5));
+}
+
+TEST_CASE("the rho gate is strict: gamma = n_ovf / n_vis > rho") {
+  const auto g = one_gaussian({0.5f, 0.1f, 1.f});
+  const vcar::Mask ovf = left_of(110), inside = left_of(200);
+  auto views = [&](int n_ovf, int n_in) {
+    std::vector<vcar::Mask> v(static_cast<std::size_t>(n_ovf), ovf);
+    v.insert(v.end(), static_cast<std::size_t>(n_in), inside);
+    return v;
+  };
+  vcar::AbrParams p;  // rho = 0.6
+  CHECK(run(g, views(3, 2), p).flagged == 0);  // 3/5 = 0.6 is not > 0.6
+  CHECK(run(g, views(4, 1), p).flagged == 1);  // 4/5
+  p.rho = 0.4f;
+  CHECK(run(g, views(2, 3), p).flagged == 0);  // 2/5 = 0.4
+  const auto r = run(g, views(3, 2), p);       // 3/5 > 0.4
+  CHECK(r.flagged == 1);
+  CHECK(factor(r, g, 0) == Approx(hand(0.5, 110).f).epsilon(1e-5));
+  CHECK(run(g, views(3, 2), p).log_scale[0][0] != g.log_scale[0][0]);
+  p.rho = 0.6f;
+  CHECK(run(g, views(3, 2), p).log_scale[0][0] == g.log_scale[0][0]);
+}
+
+TEST_CASE("f_min clamps a small positive factor") {
+  const auto g = one_gaussian({0.5f, 0.1f, 1.f});
+  const Hand h = hand(0.5, 106);
+  REQUIRE(h.f > 0.0);
+  REQUIRE(h.f < 0.5);  // below the f_min chosen here
+  vcar::AbrParams p;
+  p.f_min = 0.5f;
+  CHECK(factor(run(g, {left_of(106)}, p), g, 0) == Approx(0.5).epsilon(1e-6));
+  p.f_min = 0.1f;  // default: the raw factor passes
+  CHECK(factor(run(g, {left_of(106)}, p), g, 0) == Approx(h.f).epsilon(1e-5));
+}
+
+TEST_CASE("a negative Eq. 13 numerator gives f_min (B.3)") {
+  const auto g = one_gaussian({0.5f, 0.1f, 1.f});
+  const Hand h = hand(0.5, 101);  // l ~ 0.7 px: (l/3)^2 < eps2d = lambda - w_1
+  REQUIRE(h.f < 0.0);
+  const auto r = run(g, {left_of(101)});
+  CHECK(factor(r, g, 0) == Approx(0.1).epsilon(1e-6));
+  CHECK(r.axis_compressed[0] == 0b001);
+}
+
+TEST_CASE("a centre on background is not eligible (B.1)") {
+  const auto g = one_gaussian({0.5f, 0.1f, 1.f});
+  vcar::BoundaryRefinement abr(g, {0});
+  abr.add_view(camera(), left_of(95));  // centre at u = 100.3 is background
+  abr.add_view(camera(), left_of(95));
+  CHECK(abr.n_vis(0) == 0);
+  CHECK(abr.n_ovf(0) == 0);
+  const auto r = abr.finish();
+  CHECK(r.flagged == 0);
+  CHECK(r.log_scale[0][0] == g.log_scale[0][0]);
+  // A centre behind the camera is not eligible either.
+  vcar::GaussianScene behind = g;
+  behind.mean[2][0] = -10.f;
+  vcar::BoundaryRefinement abr2(behind, {0});
+  abr2.add_view(camera(), left_of(200));
+  CHECK(abr2.n_vis(0) == 0);
+}
+
+TEST_CASE("an endpoint outside the image counts as overflow, traced to the image edge") {
+  const auto g = one_gaussian({0.5f, 0.1f, 1.f});
+  const vcar::Camera cam = camera(112, 100);  // all foreground; the image ends at u = 112
+  const Hand h = hand(0.5, 112);
+  vcar::BoundaryRefinement abr(g, {0});
+  abr.add_view(cam, vcar::Mask(112, 100, 1, 255));
+  CHECK(abr.n_ovf(0) == 1);
+  CHECK(factor(abr.finish(), g, 0) == Approx(h.f).epsilon(1e-5));
+}
+
+TEST_CASE("an elongated Gaussian inside the mask is not penalised (directional test)") {
+  const auto g = one_gaussian({0.5f, 0.1f, 1.f});  // a = 15.1 px, the mask reaches u = 116
+  vcar::BoundaryRefinement abr(g, {0});
+  abr.add_view(camera(), left_of(116));
+  CHECK(abr.n_vis(0) == 1);
+  CHECK(abr.n_ovf(0) == 0);
+  CHECK(abr.finish().flagged == 0);
+}
+
+TEST_CASE("compression_factor: degenerate w_{d*} and the reference-code rules") {
+  vcar::AbrParams p;
+  const std::array<float, 3> zero{0.f, 0.f, 0.f};
+  CHECK(std::isinf(vcar::compression_factor(1.f, 0.3f, zero, 0, p)));  // rule (c): no candidate
+  // Paper: f^2 = ((l/3)^2 - lambda + w*) / w*, lambda = 10 + 5 + 0.3.
+  const std::array<float, 3> w{10.f, 5.f, 0.f};
+  const float lambda = 15.3f, l = 9.f;  // (l/3)^2 = 9
+  CHECK(vcar::compression_factor(l, lambda, w, 0, p) == Approx(std::sqrt((9.0 - 15.3 + 10.0) / 10.0)));
+  // Reference code: w* -> lambda w* / sum w = 15.3 * 10 / 15 = 10.2.
+  p.reference_code_rules = true;
+  CHECK(vcar::compression_factor(l, lambda, w, 0, p) == Approx(std::sqrt((9.0 - 15.3 + 10.2) / 10.2)));
+  CHECK(std::isinf(vcar::compression_factor(12.f, lambda, w, 0, p)));  // (12/3)^2 = 16 >= lambda
+  CHECK(vcar::compression_factor(3.f, lambda, w, 0, p) == Approx(0.1f));  // negative numerator
+}
+
+TEST_CASE("reference-code rules on the straddling Gaussian") {
+  const auto g = one_gaussian({0.5f, 0.1f, 1.f});
+  const Hand h = hand(0.5, 110);
+  vcar::AbrParams p;
+  p.reference_code_rules = true;
+  // Along u = e1 only axis 0 contributes, so its share is all of lambda: f = (l/3) / sqrt(lambda).
+  CHECK(factor(run(g, {left_of(110)}, p), g, 0) == Approx(h.l / 3.0 / std::sqrt(h.lambda)).epsilon(1e-5));
+}
+
+TEST_CASE("results are bit-identical for any thread count") {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> U(-1.f, 1.f), L(-4.f, -2.f);
+  vcar::GaussianScene g;
+  const int n = 6000;
+  g.resize(n);
+  for (int i = 0; i < n; ++i)
+    g.set(i, {U(rng), U(rng), U(rng)}, {L(rng), L(rng), L(rng)}, {U(rng), U(rng), U(rng), U(rng) + 0.01f}, 0.f);
+  std::vector<vcar::Index> cand(n);
+  for (int i = 0; i < n; ++i) cand[i] = static_cast<vcar::Index>(n - 1 - i);
+  const vcar::Intrinsics k{160, 120, 150.f, 150.f, 80.f, 60.f};
+  std::vector<vcar::Camera> cams;
+  std::vector<vcar::Mask> masks;
+  for (int v = 0; v < 6; ++v) {
+    const float a = 1.047f * v;
+    cams.push_back(vcar::Camera::look_at({3.5f * std::cos(a), 0.5f, 3.5f * std::sin(a)}, {0, 0, 0}, {0, 1, 0}, k, "v" + std::to_string(v)));
+    vcar::Mask m(160, 120, 1, 0);
+    for (int y = 0; y < 120; ++y)
+      for (int x = 0; x < 160; ++x) m(x, y) = (x - 80) * (x - 80) + (y - 60) * (y - 60) < 40 * 40 + 10 * v ? 255 : 0;
+    masks.push_back(m);
+  }
+  auto go = [&](int threads) {
+    vcar::set_num_threads(threads);
+    vcar::BoundaryRefinement abr(g, cand);
+    for (int v = 0; v < 6; ++v) abr.add_view(cams[v], masks[v]);
+    return abr.finish();
+  };
+  const int saved = vcar::max_threads();
+  const auto r1 = go(1), r2 = go(2), r3 = go(3);
+  vcar::set_num_threads(saved);
+  CHECK(r1.compressed > 100);  // the test exercises compression
+  CHECK(r1.log_scale == r2.log_scale);
+  CHECK(r1.log_scale == r3.log_scale);
+  CHECK(r1.axis_compressed == r2.axis_compressed);
+  CHECK(r1.flagged == r3.flagged);
+}
+
+TEST_CASE("outputs stay aligned with the candidates as given") {
+  // Gaussian 0 straddles the edge; Gaussian 1 is small and well inside; Gaussian 2 is not a candidate.
+  vcar::GaussianScene g;
+  g.resize(3);
+  const Eigen::Vector3f big = Eigen::Vector3f(0.5f, 0.1f, 1.f).array().log();
+  const Eigen::Vector3f small = Eigen::Vector3f(0.05f, 0.05f, 0.05f).array().log();
+  g.set(0, {0.f, 0.f, 10.f}, big, {1, 0, 0, 0}, 5.f);
+  g.set(1, {-0.3f, 0.1f, 10.f}, small, {1, 0, 0, 0}, 5.f);
+  g.set(2, {0.f, 0.f, 10.f}, big, {1, 0, 0, 0}, 5.f);
+  vcar::BoundaryRefinement abr(g, {1, 0});
+  abr.add_view(camera(), left_of(110));
+  CHECK(abr.candidates() == std::vector<vcar::Index>{1, 0});
+  CHECK(abr.n_ovf(0) == 0);
+  CHECK(abr.n_ovf(1) == 1);
+  const auto r = abr.finish();
+  REQUIRE(r.log_scale[0].size() == 2);
+  CHECK(r.axis_compressed == std::vector<std::uint8_t>{0, 0b001});
+  for (int d = 0; d < 3; ++d) CHECK(r.log_scale[d][0] == g.log_scale[d][1]);
+  CHECK(std::exp(static_cast<double>(r.log_scale[0][1]) - g.log_scale[0][0]) == Approx(hand(0.5, 110).f).epsilon(1e-5));
+}
+
+TEST_CASE("bad input names what is at fault") {
+  const auto g = one_gaussian({0.5f, 0.1f, 1.f});
+  CHECK_THROWS_AS(vcar::BoundaryRefinement(g, {1}), vcar::Error);
+  vcar::AbrParams p;
+  p.f_min = 0.f;
+  try {
+    vcar::BoundaryRefinement(g, {0}, p);
+    FAIL("expected an error");
+  } catch (const vcar::Error& e) {
+    CHECK(e.where().find("f_min") != std::string::npos);
+  }
+  vcar::BoundaryRefinement abr(g, {0});
+  try {
+    abr.add_view(camera(200, 100, "IMG_3"), vcar::Mask(100, 100, 1, 255));
+    FAIL("expected an error");
+  } catch (const vcar::Error& e) {
+    CHECK(std::string(e.what()).find("IMG_3") != std::string::npos);
+  }
+}
