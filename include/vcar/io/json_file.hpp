@@ -1,0 +1,40 @@
+#pragma once
+// JSON files for the camera readers: parse errors and type errors become vcar::Error naming the
+// file; floats are written by their shortest decimal form so that they read back bit-exact.
+#include <charconv>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "vcar/core/error.hpp"
+#include "vcar/io/atomic_file.hpp"
+
+namespace vcar::io {
+
+inline nlohmann::json read_json_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error("cannot open file", path.string());
+  try {
+    return nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(std::string("malformed JSON: ") + e.what(), path.string());
+  }
+}
+
+inline void write_json_file(const std::filesystem::path& path, const nlohmann::json& j) {
+  const std::string text = j.dump(2) + "\n";
+  atomic_write(path, [&](std::ostream& out) { out << text; });
+}
+
+// A float as the double that prints shortest (0.1f -> 0.1, not 0.10000000149011612).
+inline double json_float(float v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  double d = 0.0;
+  std::from_chars(buf, r.ptr, d);
+  return d;
+}
+
+}  // namespace vcar::io
