@@ -1,0 +1,76 @@
+#pragma once
+// Eq. 1 for a SIMD batch of Gaussian means (SoA x, y, z): the one projection that voting and
+// the valid-camera filter (A.1) share, so both apply exactly the same visibility test.
+#include <cstdint>
+
+#include <xsimd/xsimd.hpp>
+
+#include "vcar/core/camera.hpp"
+
+namespace vcar::detail {
+
+// A camera reduced to what the projection of means needs.
+struct MeanProjection {
+  float R[9], t[3], fx, fy, cx, cy;
+  int width, height;
+
+  static MeanProjection from(const Camera& c) {
+    MeanProjection p{};
+    for (int r = 0; r < 3; ++r) {
+      for (int k = 0; k < 3; ++k) p.R[3 * r + k] = c.R_w(r, k);
+      p.t[r] = c.t_w[r];
+    }
+    p.fx = c.fx; p.fy = c.fy; p.cx = c.cx; p.cy = c.cy;
+    p.width = c.width; p.height = c.height;
+    return p;
+  }
+};
+
+inline constexpr std::size_t mean_batch = xsimd::batch<float>::size;
+
+// Eq. 1 for one batch of means, in registers: pixel index row * W + col of the containing
+// pixel (0 when invisible), visibility (0/1) and camera depth z per lane.
+struct ProjectedBatch {
+  xsimd::batch<std::int32_t> pix, vis;
+  xsimd::batch<float> z;
+};
+
+inline ProjectedBatch project(const MeanProjection& w, const float* x, const float* y, const float* z) {
+  using B = xsimd::batch<float>;
+  using BI = xsimd::batch<std::int32_t>;
+  const B X = B::load_unaligned(x), Y = B::load_unaligned(y), Z = B::load_unaligned(z);
+  auto row = [&](int r) {  // t = R_w mu + t_w
+    return xsimd::fma(B(w.R[3 * r]), X, xsimd::fma(B(w.R[3 * r + 1]), Y, xsimd::fma(B(w.R[3 * r + 2]), Z, B(w.t[r]))));
+  };
+  const B tx = row(0), ty = row(1), tz = row(2);
+  const B u = (B(w.fx) * tx) / tz + B(w.cx);  // CONVENTIONS 2: u = fx x / z + cx
+  const B v = (B(w.fy) * ty) / tz + B(w.cy);
+  // Eq. 1: z > 0, 0 <= u < W, 0 <= v < H (NaN fails every comparison).
+  const auto in = (tz > B(0.f)) & (u >= B(0.f)) & (u < B(static_cast<float>(w.width))) &
+                  (v >= B(0.f)) & (v < B(static_cast<float>(w.height)));
+  const BI iu = xsimd::to_int(xsimd::select(in, u, B(0.f)));  // truncation = floor for u >= 0
+  const BI iv = xsimd::to_int(xsimd::select(in, v, B(0.f)));
+  return {iv * BI(w.width) + iu, xsimd::to_int(xsimd::select(in, B(1.f), B(0.f))), tz};
+}
+
+// project() stored to arrays of mean_batch lanes.
+inline void project_batch(const MeanProjection& w, const float* x, const float* y, const float* z,
+                          std::int32_t* pix, std::int32_t* vis, float* depth) {
+  const ProjectedBatch p = project(w, x, y, z);
+  p.pix.store_unaligned(pix);
+  p.vis.store_unaligned(vis);
+  p.z.store_unaligned(depth);
+}
+
+// project_batch for the first m < mean_batch lanes (the tail); lanes >= m come out invisible.
+inline void project_tail(const MeanProjection& w, const float* x, const float* y, const float* z, std::size_t m,
+                         std::int32_t* pix, std::int32_t* vis, float* depth) {
+  alignas(64) float px[mean_batch], py[mean_batch], pz[mean_batch];
+  for (std::size_t l = 0; l < mean_batch; ++l) {
+    px[l] = l < m ? x[l] : 0.f; py[l] = l < m ? y[l] : 0.f; pz[l] = l < m ? z[l] : 0.f;
+  }
+  project_batch(w, px, py, pz, pix, vis, depth);
+  for (std::size_t l = m; l < mean_batch; ++l) { vis[l] = 0; pix[l] = 0; }
+}
+
+}  // namespace vcar::detail

@@ -1,0 +1,231 @@
+#pragma once
+// Every parameter of VCAR (paper Sec. 4.2, supplementary A.1, CONVENTIONS 5) with its paper
+// name, plus the switches that reach the released reference code (CONVENTIONS 7) and the
+// extensions beyond the paper (off by default).
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <initializer_list>
+#include <string>
+#include <string_view>
+#include <utility>
+
+#include <Eigen/Core>
+
+#include "vcar/core/error.hpp"
+
+namespace vcar {
+
+// Where the spiral positions live (Eq. 8). Paper: the frame whose third axis is the estimated
+// scene up. ReferenceCode: the world axes as given (third axis world +z), as the released code.
+enum class SpiralVariant { Paper, ReferenceCode };
+// Intrinsics of the sampled views: the reference view's, or the reference code's 45 degree
+// field of view on the short side with a centred principal point (same image size).
+enum class SampledIntrinsics { ReferenceView, ReferenceCode45Fov };
+// ABR compression rule (Eq. 12-13). ReferenceCode: compress only when (l/3)^2 < lambda and
+// take the dominant share of lambda in proportion w_d / sum w (CONVENTIONS 7).
+enum class AbrVariant { Paper, ReferenceCode };
+
+struct VcarParams {
+  // --- Stage 1 and 2: visibility-based weighted voting ----------------------------------
+  float tau_coarse = 0.5f;   // Eq. 3: coarse threshold on R_i (nvos 0.5, lerf 0.4)
+  float tau_fine = 0.8f;     // Eq. 3: fine threshold on R_i (nvos 0.8, lerf 0.6, code 0.9)
+  // --- Stage 2: object sphere, view completeness, spiral --------------------------------
+  float eta = 1.2f;          // Eq. 5: sphere radius factor (paper 1.2, code 1.1)
+  float rho_min = 0.2f;      // A.1: valid-camera visible fraction rho^(j) >= rho_min (code 0.01)
+  int K = 2000;              // Eq. 6, A.3: Fibonacci probe directions
+  float Delta_th_deg = 90.f; // Eq. 6: SSS runs when Delta_max > Delta_th (degrees)
+  int S1 = 4;                // Eq. 7: spiral revolutions
+  int S2 = 8;                // Eq. 7: points per revolution (N_s = S1 S2)
+  float phi_s_deg = -60.f;   // Eq. 7: first elevation (degrees; code +60)
+  float phi_e_deg = 60.f;    // Eq. 7: last elevation (degrees; code -10)
+  // --- Stage 3: axis-aware boundary refinement -------------------------------------------
+  float sigma_c = 3.f;       // Eq. 9: ellipse cutoff, semi-axes sigma_c sqrt(lambda) (default 3)
+  float rho = 0.6f;          // B.3: overflow-ratio gate, refine when ratio > rho (strict) (0.6)
+  float f_min = 0.1f;        // Eq. 13: lower clamp of the compression factor, in (0, 1] (0.1)
+  int boundary_samples = 129;  // B.3: samples from the centre to each endpoint for l_u (129)
+  // --- Switches ---------------------------------------------------------------------------
+  bool enable_sss = true;    // Sec. 3.3: run view completeness + spiral sampling
+  bool enable_abr = true;    // Sec. 3.4: run ABR
+  bool force_sss = false;    // ablation: sample the spiral whatever Delta_max is
+  // Beyond the paper: a Gaussian counts as visible only when not behind the rendered surface,
+  // z <= (depth / alpha)(pixel) * (1 + depth_tolerance) (see visibility_voting.hpp).
+  bool occlusion_aware = false;
+  float depth_tolerance = 0.05f;
+  // Beyond the paper: instead of the full spiral, a few views in a cone around the largest
+  // gap direction (spiral_sampler.hpp gap_directed_cameras).
+  bool gap_directed = false;
+  int gap_directed_views = 8;
+  float gap_directed_cone_deg = 30.f;  // half-angle of the cone around the gap direction
+  SpiralVariant spiral_variant = SpiralVariant::Paper;
+  SampledIntrinsics sampled_intrinsics = SampledIntrinsics::ReferenceView;
+  float sampled_fov_deg = 45.f;  // field of view on the short side for ReferenceCode45Fov
+  // Background (RGB in [0,1]) of the renders handed to the segmenter (paper: black; code white).
+  Eigen::Vector3f background = Eigen::Vector3f::Zero();
+  // --- Reference-code differences (CONVENTIONS 7), off in the paper presets ----------------
+  AbrVariant abr_variant = AbrVariant::Paper;
+  // Frames whose fraction of non-background pixels is under this are not segmented (the
+  // prompt frame is always kept). 0 = off (paper); code 0.005.
+  float min_frame_content = 0.f;
+  // A mask whose foreground fraction is <= this counts as no mask. 0 = off (paper); code 0.001.
+  float min_mask_fraction = 0.f;
+
+  // Paper defaults for NVOS (Sec. 4.2).
+  static VcarParams nvos() { return VcarParams{}; }
+  // Paper defaults for LERF: lower thresholds for small objects (Sec. 4.2; tau_fine in 0.5-0.7).
+  static VcarParams lerf() {
+    VcarParams p;
+    p.tau_coarse = 0.4f;
+    p.tau_fine = 0.6f;
+    return p;
+  }
+  // The released reference code's values (CONVENTIONS 7), NVOS thresholds. The spiral frame
+  // stays the scene-up frame (CONVENTIONS 7 fixes the code's z-up/y-up mix); set
+  // spiral_variant=ReferenceCode for the code's world-axis positions.
+  static VcarParams reference_code() {
+    VcarParams p;
+    p.tau_fine = 0.9f;
+    p.rho_min = 0.01f;
+    p.phi_s_deg = 60.f;
+    p.phi_e_deg = -10.f;
+    p.eta = 1.1f;
+    p.sampled_intrinsics = SampledIntrinsics::ReferenceCode45Fov;
+    p.background = Eigen::Vector3f::Ones();
+    p.abr_variant = AbrVariant::ReferenceCode;
+    p.min_frame_content = 0.005f;
+    p.min_mask_fraction = 0.001f;
+    return p;
+  }
+
+  // Calls f(name, field) for every field, names exactly as declared (const and non-const).
+  template <class Self, class F>
+  static void for_each_field(Self& p, F&& f) {
+    f("tau_coarse", p.tau_coarse); f("tau_fine", p.tau_fine); f("eta", p.eta);
+    f("rho_min", p.rho_min); f("K", p.K); f("Delta_th_deg", p.Delta_th_deg);
+    f("S1", p.S1); f("S2", p.S2); f("phi_s_deg", p.phi_s_deg); f("phi_e_deg", p.phi_e_deg);
+    f("sigma_c", p.sigma_c); f("rho", p.rho); f("f_min", p.f_min);
+    f("boundary_samples", p.boundary_samples);
+    f("enable_sss", p.enable_sss); f("enable_abr", p.enable_abr); f("force_sss", p.force_sss);
+    f("occlusion_aware", p.occlusion_aware); f("depth_tolerance", p.depth_tolerance);
+    f("gap_directed", p.gap_directed); f("gap_directed_views", p.gap_directed_views);
+    f("gap_directed_cone_deg", p.gap_directed_cone_deg); f("spiral_variant", p.spiral_variant);
+    f("sampled_intrinsics", p.sampled_intrinsics); f("sampled_fov_deg", p.sampled_fov_deg);
+    f("background", p.background); f("abr_variant", p.abr_variant);
+    f("min_frame_content", p.min_frame_content); f("min_mask_fraction", p.min_mask_fraction);
+  }
+
+  // Comma-separated list of the field names (for error messages and --help).
+  static std::string keys() {
+    std::string out;
+    VcarParams p;
+    for_each_field(p, [&](const char* name, auto&) { out += (out.empty() ? "" : ", ") + std::string(name); });
+    return out;
+  }
+
+  // `--set key=value`: key is a field name; value as the field's type (numbers, true/false/1/0,
+  // enum names Paper/ReferenceCode/ReferenceView/ReferenceCode45Fov, colours "r,g,b").
+  void set(std::string_view key, std::string_view value) {
+    bool found = false;
+    for_each_field(*this, [&](const char* name, auto& field) {
+      if (key != name) return;
+      found = true;
+      parse(std::string(name), std::string(value), field);
+    });
+    if (!found)
+      throw Error("unknown parameter '" + std::string(key) + "'; valid keys: " + keys(), "--set");
+  }
+  // "key=value" form of set().
+  void set(std::string_view assignment) {
+    const auto eq = assignment.find('=');
+    if (eq == std::string_view::npos)
+      throw Error("expected key=value, got '" + std::string(assignment) + "'", "--set");
+    set(assignment.substr(0, eq), assignment.substr(eq + 1));
+  }
+
+  // Throws vcar::Error naming the first parameter outside its range.
+  void validate() const {
+    auto bad = [](const char* name, const std::string& why) { throw Error(why, name); };
+    auto unit = [&](const char* name, float v) {
+      if (!(v >= 0.f && v <= 1.f)) bad(name, "must be in [0, 1], got " + std::to_string(v));
+    };
+    unit("tau_coarse", tau_coarse);
+    unit("tau_fine", tau_fine);
+    unit("rho_min", rho_min);
+    unit("rho", rho);
+    if (!(eta > 0.f && std::isfinite(eta))) bad("eta", "must be positive");
+    if (K < 1) bad("K", "must be >= 1, got " + std::to_string(K));
+    if (!(Delta_th_deg >= 0.f && Delta_th_deg <= 180.f)) bad("Delta_th_deg", "must be in [0, 180]");
+    if (S1 < 1) bad("S1", "must be >= 1, got " + std::to_string(S1));
+    if (S2 < 1) bad("S2", "must be >= 1, got " + std::to_string(S2));
+    if (!(std::abs(phi_s_deg) <= 90.f)) bad("phi_s_deg", "must be in [-90, 90]");
+    if (!(std::abs(phi_e_deg) <= 90.f)) bad("phi_e_deg", "must be in [-90, 90]");
+    if (!(sigma_c > 0.f && std::isfinite(sigma_c))) bad("sigma_c", "must be positive");
+    if (!(f_min > 0.f && f_min <= 1.f)) bad("f_min", "must be in (0, 1], got " + std::to_string(f_min));
+    if (boundary_samples < 2) bad("boundary_samples", "must be >= 2");
+    if (!(depth_tolerance >= 0.f && std::isfinite(depth_tolerance))) bad("depth_tolerance", "must be >= 0");
+    if (gap_directed_views < 1) bad("gap_directed_views", "must be >= 1");
+    if (!(gap_directed_cone_deg >= 0.f && gap_directed_cone_deg < 180.f))
+      bad("gap_directed_cone_deg", "must be in [0, 180)");
+    if (!(sampled_fov_deg > 0.f && sampled_fov_deg < 180.f)) bad("sampled_fov_deg", "must be in (0, 180)");
+    if (!((background.array() >= 0.f).all() && (background.array() <= 1.f).all()))
+      bad("background", "each channel must be in [0, 1]");
+    unit("min_frame_content", min_frame_content);
+    unit("min_mask_fraction", min_mask_fraction);
+  }
+
+private:
+  static void parse(const std::string& key, const std::string& s, float& out) {
+    errno = 0;
+    char* end = nullptr;
+    const float v = std::strtof(s.c_str(), &end);
+    if (s.empty() || end != s.c_str() + s.size() || errno != 0 || !std::isfinite(v))
+      throw Error("expected a number, got '" + s + "'", key);
+    out = v;
+  }
+  static void parse(const std::string& key, const std::string& s, int& out) {
+    errno = 0;
+    char* end = nullptr;
+    const long v = std::strtol(s.c_str(), &end, 10);
+    if (s.empty() || end != s.c_str() + s.size() || errno != 0 || v < -2147483647L || v > 2147483647L)
+      throw Error("expected an integer, got '" + s + "'", key);
+    out = static_cast<int>(v);
+  }
+  static void parse(const std::string& key, const std::string& s, bool& out) {
+    if (s == "true" || s == "1" || s == "on") out = true;
+    else if (s == "false" || s == "0" || s == "off") out = false;
+    else throw Error("expected true/false, got '" + s + "'", key);
+  }
+  static void parse(const std::string& key, const std::string& s, Eigen::Vector3f& out) {
+    Eigen::Vector3f v;
+    std::size_t start = 0;
+    for (int c = 0; c < 3; ++c) {
+      const std::size_t comma = s.find(',', start);
+      if ((c < 2) == (comma == std::string::npos)) throw Error("expected r,g,b, got '" + s + "'", key);
+      parse(key, s.substr(start, c < 2 ? comma - start : std::string::npos), v[c]);
+      start = comma + 1;
+    }
+    out = v;
+  }
+  template <class E>
+  static void parse_enum(const std::string& key, const std::string& s, E& out,
+                         std::initializer_list<std::pair<const char*, E>> names) {
+    std::string valid;
+    for (const auto& [n, e] : names) {
+      if (s == n) { out = e; return; }
+      valid += (valid.empty() ? "" : ", ") + std::string(n);
+    }
+    throw Error("unknown value '" + s + "'; valid: " + valid, key);
+  }
+  static void parse(const std::string& key, const std::string& s, SpiralVariant& out) {
+    parse_enum(key, s, out, {{"Paper", SpiralVariant::Paper}, {"ReferenceCode", SpiralVariant::ReferenceCode}});
+  }
+  static void parse(const std::string& key, const std::string& s, SampledIntrinsics& out) {
+    parse_enum(key, s, out, {{"ReferenceView", SampledIntrinsics::ReferenceView},
+                             {"ReferenceCode45Fov", SampledIntrinsics::ReferenceCode45Fov}});
+  }
+  static void parse(const std::string& key, const std::string& s, AbrVariant& out) {
+    parse_enum(key, s, out, {{"Paper", AbrVariant::Paper}, {"ReferenceCode", AbrVariant::ReferenceCode}});
+  }
+};
+
+}  // namespace vcar

@@ -1,0 +1,105 @@
+#include <catch2/catch.hpp>
+
+#include <set>
+
+#include "vcar/algo/params.hpp"
+
+using vcar::VcarParams;
+
+namespace {
+std::string where_of(VcarParams p) {
+  try {
+    p.validate();
+  } catch (const vcar::Error& e) {
+    return e.where();
+  }
+  return "";
+}
+}  // namespace
+
+TEST_CASE("presets carry the paper's and the reference code's values") {
+  const auto n = VcarParams::nvos();
+  CHECK(n.tau_coarse == 0.5f);
+  CHECK(n.tau_fine == 0.8f);
+  CHECK(n.rho_min == 0.2f);
+  CHECK(n.K == 2000);
+  CHECK(n.Delta_th_deg == 90.f);
+  CHECK(n.eta == 1.2f);
+  CHECK(n.S1 * n.S2 == 32);
+  CHECK(n.phi_s_deg == -60.f);
+  CHECK(n.phi_e_deg == 60.f);
+  CHECK(n.sigma_c == 3.f);
+  CHECK(n.rho == 0.6f);
+  CHECK(n.f_min == 0.1f);
+  CHECK(n.boundary_samples == 129);
+  CHECK_FALSE(n.occlusion_aware);
+  CHECK_FALSE(n.gap_directed);
+  const auto l = VcarParams::lerf();
+  CHECK(l.tau_coarse == 0.4f);
+  CHECK(l.tau_fine >= 0.5f);
+  CHECK(l.tau_fine <= 0.7f);
+  const auto c = VcarParams::reference_code();
+  CHECK(c.rho_min == 0.01f);
+  CHECK(c.tau_fine == 0.9f);
+  CHECK(c.eta == 1.1f);
+  CHECK(c.phi_s_deg == 60.f);
+  CHECK(c.phi_e_deg == -10.f);
+  CHECK(c.sampled_intrinsics == vcar::SampledIntrinsics::ReferenceCode45Fov);
+  CHECK(c.abr_variant == vcar::AbrVariant::ReferenceCode);
+  CHECK(c.background == Eigen::Vector3f::Ones());
+  CHECK(c.min_mask_fraction == 0.001f);
+  CHECK(c.min_frame_content == 0.005f);
+  CHECK(n.min_mask_fraction == 0.f);
+  for (const auto& p : {n, l, c}) CHECK_NOTHROW(p.validate());
+}
+
+TEST_CASE("validate names the parameter at fault") {
+  VcarParams p;
+  p.tau_coarse = 1.5f;
+  CHECK(where_of(p) == "tau_coarse");
+  p = {}; p.tau_fine = -0.1f;  CHECK(where_of(p) == "tau_fine");
+  p = {}; p.K = 0;             CHECK(where_of(p) == "K");
+  p = {}; p.S2 = 0;            CHECK(where_of(p) == "S2");
+  p = {}; p.f_min = 0.f;       CHECK(where_of(p) == "f_min");
+  p = {}; p.f_min = 1.f;       CHECK(where_of(p) == "");  // (0, 1]
+  p = {}; p.f_min = 1.01f;     CHECK(where_of(p) == "f_min");
+  p = {}; p.rho_min = 2.f;     CHECK(where_of(p) == "rho_min");
+  p = {}; p.eta = 0.f;         CHECK(where_of(p) == "eta");
+  p = {}; p.phi_e_deg = 95.f;  CHECK(where_of(p) == "phi_e_deg");
+}
+
+TEST_CASE("set(key, value) parses every kind of field and rejects unknown keys") {
+  VcarParams p;
+  p.set("tau_fine", "0.65");
+  CHECK(p.tau_fine == Approx(0.65));
+  p.set("K=500");
+  CHECK(p.K == 500);
+  p.set("enable_sss", "false");
+  CHECK_FALSE(p.enable_sss);
+  p.set("spiral_variant", "ReferenceCode");
+  CHECK(p.spiral_variant == vcar::SpiralVariant::ReferenceCode);
+  p.set("sampled_intrinsics", "ReferenceCode45Fov");
+  CHECK(p.sampled_intrinsics == vcar::SampledIntrinsics::ReferenceCode45Fov);
+  p.set("background", "1,0.5,0");
+  CHECK(p.background == Eigen::Vector3f(1, 0.5f, 0));
+  CHECK_THROWS_AS(p.set("K", "12x"), vcar::Error);
+  CHECK_THROWS_AS(p.set("tau_fine", ""), vcar::Error);
+  CHECK_THROWS_AS(p.set("enable_abr", "maybe"), vcar::Error);
+  CHECK_THROWS_AS(p.set("spiral_variant", "Other"), vcar::Error);
+  CHECK_THROWS_AS(p.set("background", "1,2"), vcar::Error);
+  try {
+    p.set("tau", "0.5");
+    FAIL("expected an error");
+  } catch (const vcar::Error& e) {
+    const std::string msg = e.what();
+    CHECK(msg.find("tau_coarse") != std::string::npos);  // lists the valid keys
+    CHECK(msg.find("f_min") != std::string::npos);
+  }
+  // Every field is reachable by its own name, and names are unique.
+  std::set<std::string> names;
+  std::size_t count = 0;
+  VcarParams::for_each_field(p, [&](const char* name, auto&) { names.insert(name); ++count; });
+  CHECK(names.size() == count);
+  CHECK(names.count("boundary_samples") == 1);
+  CHECK(names.count("depth_tolerance") == 1);
+}
