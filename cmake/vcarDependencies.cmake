@@ -7,3 +7,6 @@ include(${CMAKE_CURRENT_LIST_DIR}/vcarStb.cmake)    # libstb-dev (pkg-config stb
 if(VCAR_USE_OPENMP)
   find_package(OpenMP COMPONENTS CXX)               # optional: serial and identical without
 endif()
+# Optional, for vcar::baselines only:
+find_package(nanoflann QUIET)                       # libnanoflann-dev
+find_package(Boost 1.74 QUIET)                      # libboost-graph-dev (header-only use)

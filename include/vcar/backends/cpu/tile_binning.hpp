@@ -1,0 +1,148 @@
+#pragma once
+// Projected splats and their binning into 16 x 16 pixel tiles: one entry
+// per tile a bounding box touches, each tile's list front to back (gsplat's (tile, depth) order).
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "vcar/core/parallel.hpp"
+
+namespace vcar::cpu {
+
+inline constexpr int tile_size = 16;  // pixels per tile side (gsplat)
+
+// What compositing reads of one splat, packed in one cache line: a tile visits its splats in
+// depth order, each once, so one line per splat beats a dozen scattered column reads.
+struct alignas(64) PackedSplat {
+  float mx, my;          // projected mean (px)
+  float rx, ry;          // bounding-box half extents (px)
+  float ca, cb, cc;      // conic: Sigma2D^-1 = [[ca, cb], [cb, cc]]
+  float sigma_max;       // ln(255 opacity): alpha >= 1/255 iff sigma <= this
+  float opacity, depth;  // sigmoid(o), camera-space z
+  float r, g, b;         // colour from SH (zero when only contributions are wanted)
+};
+
+// One entry per drawn Gaussian (index k into the request's drawn list); a splat whose tile
+// rectangle is empty is culled.
+struct ProjectedSplats {
+  std::vector<PackedSplat> splat;
+  std::vector<std::int32_t> tx0, ty0, tx1, ty1;  // touched tiles [tx0, tx1) x [ty0, ty1)
+
+  void resize(std::size_t n) {
+    splat.resize(n);
+    for (auto* v : {&tx0, &ty0, &tx1, &ty1}) v->resize(n);
+  }
+  std::size_t size() const { return splat.size(); }
+};
+
+// Tile lists as one flat array: ids[start[t] .. start[t+1]) are depth ranks j (splat[j] is the
+// packed splat, order[j] its drawn index k) touching tile t, front to back; equal depths keep
+// increasing k (deterministic).
+struct TileBins {
+  int tiles_x = 0, tiles_y = 0;
+  std::vector<PackedSplat> splat;           // splats that touch a tile, in depth order
+  std::vector<std::uint32_t> ids;
+  std::vector<std::int64_t> start;          // tiles + 1 offsets
+  std::vector<std::uint32_t> order, tmp;    // scratch: splats by depth
+  std::vector<std::uint32_t> key, key_tmp;  // scratch: depth bits
+  std::vector<std::uint64_t> rect;          // scratch: tile rectangles in depth order, 4 x 16 bit
+  std::vector<std::int64_t> chunk_offset;   // scratch: per (chunk, tile) write cursor
+  int tiles() const { return tiles_x * tiles_y; }
+};
+
+// Fixed number of chunks (independent of the thread count) so binning is deterministic.
+inline constexpr std::int64_t binning_chunks = 64;
+
+// Splats that touch a tile, sorted by camera depth with ties by index: a stable LSD radix sort
+// of the depth bits (depth >= near plane > 0, so the bits order like the floats).
+inline void sort_by_depth(const ProjectedSplats& s, TileBins& bins) {
+  const std::size_t n = s.size();
+  bins.order.clear();
+  bins.key.clear();
+  for (std::size_t k = 0; k < n; ++k)
+    if (s.tx0[k] < s.tx1[k] && s.ty0[k] < s.ty1[k]) {
+      bins.order.push_back(static_cast<std::uint32_t>(k));
+      bins.key.push_back(std::bit_cast<std::uint32_t>(s.splat[k].depth));
+    }
+  const std::size_t m = bins.order.size();
+  bins.tmp.resize(m);
+  bins.key_tmp.resize(m);
+  for (int shift = 0; shift < 32; shift += 8) {
+    std::size_t count[257] = {};
+    for (std::size_t j = 0; j < m; ++j) ++count[((bins.key[j] >> shift) & 0xff) + 1];
+    if (count[((bins.key.empty() ? 0 : bins.key[0] >> shift) & 0xff) + 1] == m) continue;  // one bucket
+    for (int b = 0; b < 256; ++b) count[b + 1] += count[b];
+    for (std::size_t j = 0; j < m; ++j) {
+      const std::size_t dst = count[(bins.key[j] >> shift) & 0xff]++;
+      bins.tmp[dst] = bins.order[j];
+      bins.key_tmp[dst] = bins.key[j];
+    }
+    bins.order.swap(bins.tmp);
+    bins.key.swap(bins.key_tmp);
+  }
+  // The rectangles and splats in depth order, so later passes read memory in sequence.
+  bins.rect.resize(m);
+  bins.splat.resize(m);
+  parallel_for(static_cast<std::int64_t>(m), [&](std::int64_t j) {
+    const std::uint32_t k = bins.order[j];
+    bins.splat[j] = s.splat[k];
+    bins.rect[j] = static_cast<std::uint64_t>(s.tx0[k]) | static_cast<std::uint64_t>(s.tx1[k]) << 16 |
+                   static_cast<std::uint64_t>(s.ty0[k]) << 32 | static_cast<std::uint64_t>(s.ty1[k]) << 48;
+  });
+}
+
+// Bins the splats into tiles in depth order: per-chunk counts, prefix sum in (tile, chunk)
+// order, scatter; each tile's list is then already front to back (gsplat's (tile, depth) sort).
+inline void bin_tiles(const ProjectedSplats& s, int width, int height, TileBins& bins) {
+  bins.tiles_x = (width + tile_size - 1) / tile_size;
+  bins.tiles_y = (height + tile_size - 1) / tile_size;
+  sort_by_depth(s, bins);
+  const std::int64_t T = bins.tiles(), n = static_cast<std::int64_t>(bins.order.size());
+  const std::int64_t chunk = std::max<std::int64_t>(1, (n + binning_chunks - 1) / binning_chunks);
+  const std::int64_t C = n == 0 ? 0 : (n + chunk - 1) / chunk;
+  bins.chunk_offset.assign(static_cast<std::size_t>(C * T), 0);
+  std::int64_t* off = bins.chunk_offset.data();
+  const std::uint64_t* rect = bins.rect.data();
+  const int tiles_x = bins.tiles_x;
+  // Calls f(tile) for each tile of the packed rectangle r.
+  auto for_tiles = [tiles_x](std::uint64_t r, auto&& f) {
+    const int tx0 = static_cast<int>(r & 0xffff), tx1 = static_cast<int>((r >> 16) & 0xffff);
+    const int ty0 = static_cast<int>((r >> 32) & 0xffff), ty1 = static_cast<int>(r >> 48);
+    for (int ty = ty0; ty < ty1; ++ty)
+      for (int tx = tx0; tx < tx1; ++tx) f(ty * tiles_x + tx);
+  };
+  parallel_chunks(n, chunk, [&](std::int64_t c, std::int64_t b, std::int64_t e) {
+    std::int64_t* cnt = off + c * T;
+    for (std::int64_t j = b; j < e; ++j) for_tiles(rect[j], [&](int t) { ++cnt[t]; });
+  });
+  bins.start.assign(static_cast<std::size_t>(T + 1), 0);
+  std::int64_t run = 0;
+  for (std::int64_t t = 0; t < T; ++t) {
+    bins.start[t] = run;
+    for (std::int64_t c = 0; c < C; ++c) {
+      const std::int64_t cnt = off[c * T + t];
+      off[c * T + t] = run;
+      run += cnt;
+    }
+  }
+  bins.start[T] = run;
+  bins.ids.resize(static_cast<std::size_t>(run));
+  std::uint32_t* ids = bins.ids.data();
+  parallel_chunks(n, chunk, [&](std::int64_t c, std::int64_t b, std::int64_t e) {
+    std::int64_t* cur = off + c * T;
+    for (std::int64_t j = b; j < e; ++j)
+      for_tiles(rect[j], [&](int t) { ids[cur[t]++] = static_cast<std::uint32_t>(j); });
+  });
+}
+
+// Tiles touched by a bounding box [m - r, m + r] (clamped to the image's tiles, end exclusive).
+inline void tile_rect(float m, float r, int tiles, std::int32_t& t0, std::int32_t& t1) {
+  const float ts = static_cast<float>(tile_size);
+  t0 = static_cast<std::int32_t>(std::clamp(std::floor((m - r) / ts), 0.f, static_cast<float>(tiles)));
+  t1 = static_cast<std::int32_t>(std::clamp(std::ceil((m + r) / ts), 0.f, static_cast<float>(tiles)));
+}
+
+}  // namespace vcar::cpu

@@ -1,0 +1,147 @@
+#pragma once
+// Front-to-back compositing of one 16 x 16 tile, SIMD over the pixels of a row (CONVENTIONS 3):
+// alpha = min(0.999, opacity exp(-sigma)), skip alpha < 1/255, stop before the Gaussian whose
+// next transmittance T (1 - alpha) would be <= 1e-4 (gsplat does not composite that one).
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+#include <xsimd/xsimd.hpp>
+
+#include "vcar/backends/cpu/tile_binning.hpp"
+
+namespace vcar::cpu {
+
+using Lane = xsimd::batch<float>;  // width follows the compiler flags (SSE2: 4, AVX2: 8, AVX-512: 16)
+static_assert(tile_size % Lane::size == 0, "a tile row is a whole number of SIMD batches");
+
+inline constexpr float alpha_max = 0.999f;        // gsplat clamp
+inline constexpr float alpha_skip = 1.f / 255.f;  // below this a splat is skipped at a pixel
+inline constexpr float T_stop = 1e-4f;            // stop when T (1 - alpha) <= this
+
+// Per-tile state; lives on the worker's stack, nothing is allocated per tile or pixel.
+struct TileState {
+  static constexpr int P = tile_size * tile_size;
+  alignas(64) float T[P];                 // transmittance
+  alignas(64) float active[P];            // 1 while the pixel still composites, else 0
+  alignas(64) float cr[P], cg[P], cb[P];  // sum c alpha T
+  alignas(64) float D[P];                 // sum z alpha T
+  alignas(64) float fg[P];                // mask value (0/1), contributions only
+  // Bit r * NB + b: batch b of row r still has an active pixel (lets whole splats be skipped
+  // once the pixels they cover are done).
+  static constexpr int NB = tile_size / static_cast<int>(Lane::size);
+  static_assert(tile_size * NB <= 64, "one bit per batch fits a 64-bit word");
+  std::uint64_t live = 0;
+
+  // Pixels outside the image (edge tiles) start inactive: they neither render nor contribute.
+  void reset(int w_valid, int h_valid) {
+    for (int p = 0; p < P; ++p) {
+      const int r = p / tile_size, c = p % tile_size;
+      T[p] = 1.f;
+      active[p] = (r < h_valid && c < w_valid) ? 1.f : 0.f;
+      cr[p] = cg[p] = cb[p] = D[p] = fg[p] = 0.f;
+    }
+    live = 0;
+    for (int p = 0; p < P; p += static_cast<int>(Lane::size))
+      if (xsimd::any(Lane::load_aligned(active + p) > Lane(0.f))) live |= std::uint64_t{1} << (p / static_cast<int>(Lane::size));
+  }
+  bool all_done() const { return live == 0; }
+};
+
+// floor(v) but at least lo, ceil(v) but at most hi; in float first, so huge splats do not overflow.
+inline int clamp_floor(float v, int lo) {
+  return v <= static_cast<float>(lo) ? lo : static_cast<int>(std::min(std::floor(v), static_cast<float>(tile_size)));
+}
+inline int clamp_ceil(float v, int hi) {
+  return v >= static_cast<float>(hi) ? hi : static_cast<int>(std::max(std::ceil(v), -1.f));
+}
+
+// Composites the splats ids[0..count) (front to back) into tile (x0, y0) of size
+// w_valid x h_valid. Colour: accumulate rgb and depth. Contrib: entry_w[e] / entry_wfg[e] get
+// sum alpha T and sum alpha T fg over the tile for entry e (entries never reached stay as given).
+template <bool Colour, bool Contrib>
+void composite_tile(const PackedSplat* splat, const std::uint32_t* ids, std::int64_t count, int x0,
+                    int y0, int w_valid, int h_valid, TileState& st, float* entry_w = nullptr,
+                    float* entry_wfg = nullptr) {
+  constexpr int L = static_cast<int>(Lane::size);
+  alignas(64) float lane_x[tile_size];  // pixel-centre x of each column (CONVENTIONS 2)
+  for (int c = 0; c < tile_size; ++c) lane_x[c] = static_cast<float>(x0 + c) + 0.5f;
+  const Lane zero(0.f), one(1.f), amax(alpha_max), askip(alpha_skip), tstop(T_stop);
+
+  constexpr std::int64_t ahead = 8;  // splats are scattered in memory: fetch a few ahead
+  for (std::int64_t e = 0; e < count; ++e) {
+    if (e + ahead < count) __builtin_prefetch(splat + ids[e + ahead]);
+    const PackedSplat& s = splat[ids[e]];
+    const float mx = s.mx, my = s.my, rx = s.rx, ry = s.ry;
+    // Rows and columns of the tile inside the bounding box, widened by one pixel for rounding.
+    const int r_lo = clamp_floor(my - ry - static_cast<float>(y0) - 1.f, 0);
+    const int r_hi = clamp_ceil(my + ry - static_cast<float>(y0) + 1.f, h_valid - 1);
+    const int c_lo = clamp_floor(mx - rx - static_cast<float>(x0) - 1.f, 0);
+    const int c_hi = clamp_ceil(mx + rx - static_cast<float>(x0) + 1.f, w_valid - 1);
+    if (r_lo > r_hi || c_lo > c_hi) continue;
+    std::uint64_t cover = 0;  // batches under the bounding box
+    const std::uint64_t row_bits = ((std::uint64_t{2} << (c_hi / L - c_lo / L)) - 1) << (c_lo / L);
+    for (int r = r_lo; r <= r_hi; ++r) cover |= row_bits << (r * TileState::NB);
+    if ((cover & st.live) == 0) continue;  // every pixel it covers is done
+    const float ca = s.ca, cb = s.cb, cc = s.cc;
+    const float sig_max = s.sigma_max + 1e-2f;  // slack for rounding: the lanes decide exactly
+    const Lane half_ca(0.5f * ca), op(s.opacity);
+    Lane sw = zero, swfg = zero;
+    bool stopped = false;
+    for (int r = r_lo; r <= r_hi; ++r) {
+      const float dy = my - (static_cast<float>(y0 + r) + 0.5f);
+      // Columns where sigma <= sigma_max (alpha >= 1/255): roots of 0.5 ca dx^2 + cb dy dx +
+      // 0.5 cc dy^2 - sigma_max, widened by a pixel; the SIMD test below decides exactly.
+      const float disc = cb * cb * dy * dy - ca * (cc * dy * dy - 2.f * sig_max);
+      if (disc < 0.f) continue;
+      const float sq = std::sqrt(disc), base = mx - static_cast<float>(x0) - 0.5f;
+      const int cl = clamp_floor(base - (-cb * dy + sq) / ca - 1.f, c_lo);
+      const int ch = clamp_ceil(base - (-cb * dy - sq) / ca + 1.f, c_hi);
+      if (cl > ch) continue;
+      const Lane ydy(0.5f * cc * dy * dy), cbdy(cb * dy);
+      for (int b = cl / L; b <= ch / L; ++b) {
+        const int bit = r * TileState::NB + b;
+        if (!((st.live >> bit) & 1u)) continue;
+        const int p = r * tile_size + b * L;
+        const Lane act = Lane::load_aligned(st.active + p);
+        const auto live = act > zero;
+        const Lane dx = Lane(mx) - Lane::load_aligned(lane_x + b * L);
+        const Lane sigma = half_ca * dx * dx + cbdy * dx + ydy;
+        const Lane alpha = xsimd::min(amax, op * xsimd::exp(-sigma));
+        const auto ok = live && (sigma >= zero) && (alpha >= askip);
+        if (!xsimd::any(ok)) continue;
+        const Lane T = Lane::load_aligned(st.T + p);
+        const Lane nT = T * (one - alpha);
+        const auto stop = ok && (nT <= tstop);
+        const auto take = ok && !stop;
+        const Lane w = xsimd::select(take, alpha * T, zero);
+        xsimd::select(take, nT, T).store_aligned(st.T + p);
+        if (xsimd::any(stop)) {
+          const Lane still = xsimd::select(stop, zero, act);
+          still.store_aligned(st.active + p);
+          if (!xsimd::any(still > zero)) {
+            st.live &= ~(std::uint64_t{1} << bit);
+            stopped = true;
+          }
+        }
+        if constexpr (Colour) {
+          (Lane::load_aligned(st.cr + p) + w * Lane(s.r)).store_aligned(st.cr + p);
+          (Lane::load_aligned(st.cg + p) + w * Lane(s.g)).store_aligned(st.cg + p);
+          (Lane::load_aligned(st.cb + p) + w * Lane(s.b)).store_aligned(st.cb + p);
+          (Lane::load_aligned(st.D + p) + w * Lane(s.depth)).store_aligned(st.D + p);
+        }
+        if constexpr (Contrib) {
+          sw += w;
+          swfg += w * Lane::load_aligned(st.fg + p);
+        }
+      }
+    }
+    if constexpr (Contrib) {
+      entry_w[e] = xsimd::hadd(sw);
+      entry_wfg[e] = xsimd::hadd(swfg);
+    }
+    if (stopped && st.all_done()) break;  // every pixel of the tile has saturated
+  }
+}
+
+}  // namespace vcar::cpu

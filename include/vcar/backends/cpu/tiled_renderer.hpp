@@ -1,0 +1,207 @@
+#pragma once
+// vcar::cpu::TiledRenderer: the CPU reference splatter, gsplat-equivalent (CONVENTIONS 3).
+// Steps: project every drawn Gaussian (core/projection.hpp, B.6-B.7), cull, bin into 16 x 16
+// tiles in camera-depth order (ties by drawn index), composite each tile front to back,
+// multi-threaded over tiles and SIMD over the pixels of a tile. Results are bit-identical for
+// any thread count. One renderer serves one call at a time (it keeps scratch buffers).
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "vcar/backends/cpu/tile_binning.hpp"
+#include "vcar/backends/cpu/tile_compositing.hpp"
+#include "vcar/concepts/renderer.hpp"
+#include "vcar/core/error.hpp"
+#include "vcar/core/parallel.hpp"
+#include "vcar/core/projection.hpp"
+#include "vcar/core/spherical_harmonics.hpp"
+
+namespace vcar::cpu {
+
+struct TiledRendererOptions {
+  ProjectionParams projection{};  // near plane, eps2d, Jacobian clamp, extent (CONVENTIONS 3)
+  int num_threads = 0;            // 0: the current vcar::max_threads()
+};
+
+class TiledRenderer {
+public:
+  TiledRenderer() = default;
+  explicit TiledRenderer(TiledRendererOptions o) : opt_(o) {}
+  const TiledRendererOptions& options() const { return opt_; }
+  TiledRendererOptions& options() { return opt_; }
+
+  // Renders rgb (bg * T_final behind), alpha = 1 - T_final and, if asked, depth = sum z alpha T.
+  RenderOutput render(const RenderRequest& q) {
+    const Camera& cam = check(q);
+    ThreadScope threads(opt_.num_threads);
+    prepare(q, /*colour=*/true);
+    const int W = cam.width, H = cam.height;
+    RenderOutput out;
+    out.rgb = ImageF(W, H, 3);
+    out.alpha = ImageF(W, H, 1);
+    if (q.want_depth) out.depth = ImageF(W, H, 1);
+    const Eigen::Vector3f bg = q.background;
+    parallel_for_dynamic(bins_.tiles(), [&](std::int64_t t) {
+      int x0, y0, w, h;
+      tile_extent(t, W, H, x0, y0, w, h);
+      TileState st;
+      st.reset(w, h);
+      const std::int64_t b = bins_.start[t], e = bins_.start[t + 1];
+      composite_tile<true, false>(bins_.splat.data(), bins_.ids.data() + b, e - b, x0, y0, w, h, st);
+      for (int r = 0; r < h; ++r)
+        for (int c = 0; c < w; ++c) {
+          const int p = r * tile_size + c;
+          const std::size_t o = static_cast<std::size_t>(y0 + r) * W + (x0 + c);
+          out.rgb.data[o * 3 + 0] = st.cr[p] + bg[0] * st.T[p];
+          out.rgb.data[o * 3 + 1] = st.cg[p] + bg[1] * st.T[p];
+          out.rgb.data[o * 3 + 2] = st.cb[p] + bg[2] * st.T[p];
+          out.alpha.data[o] = 1.f - st.T[p];
+          if (q.want_depth) out.depth.data[o] = st.D[p];
+        }
+    });
+    return out;
+  }
+
+  // weight[i] += sum_p alpha_i T_i, weight_fg[i] += sum_p alpha_i T_i [mask != 0] over the pixels
+  // of this view, i indexing the scene. Empty `acc` is sized to the scene first.
+  void accumulate_contributions(const RenderRequest& q, const Mask& mask, Contributions& acc) {
+    const Camera& cam = check(q);
+    const std::size_t n = q.scene->size();
+    if (mask.width != cam.width || mask.height != cam.height || mask.channels != 1)
+      throw Error("mask is " + std::to_string(mask.width) + "x" + std::to_string(mask.height) +
+                  ", view is " + std::to_string(cam.width) + "x" + std::to_string(cam.height),
+                  "view '" + cam.name + "'");
+    if (acc.weight.empty() && acc.weight_fg.empty()) acc.reset(n);
+    if (acc.weight.size() != n || acc.weight_fg.size() != n)
+      throw Error("contribution vectors must be sized like the scene", "Contributions");
+    ThreadScope threads(opt_.num_threads);
+    prepare(q, /*colour=*/false);
+    const int W = cam.width, H = cam.height;
+    entry_w_.assign(bins_.ids.size(), 0.f);
+    entry_wfg_.assign(bins_.ids.size(), 0.f);
+    parallel_for_dynamic(bins_.tiles(), [&](std::int64_t t) {
+      int x0, y0, w, h;
+      tile_extent(t, W, H, x0, y0, w, h);
+      TileState st;
+      st.reset(w, h);
+      for (int r = 0; r < h; ++r)
+        for (int c = 0; c < w; ++c)
+          st.fg[r * tile_size + c] = mask.data[static_cast<std::size_t>(y0 + r) * W + (x0 + c)] != 0 ? 1.f : 0.f;
+      const std::int64_t b = bins_.start[t], e = bins_.start[t + 1];
+      composite_tile<false, true>(bins_.splat.data(), bins_.ids.data() + b, e - b, x0, y0, w, h, st,
+                                  entry_w_.data() + b, entry_wfg_.data() + b);
+    });
+    // Reduced in tile order, one thread: the sums do not depend on the thread count.
+    for (std::size_t e = 0; e < bins_.ids.size(); ++e) {
+      const std::size_t i = scene_index(q, bins_.order[bins_.ids[e]]);
+      acc.weight[i] += entry_w_[e];
+      acc.weight_fg[i] += entry_wfg_[e];
+    }
+  }
+
+private:
+  // Sets the thread count for one call (restored afterwards); 0 leaves it as it is.
+  struct ThreadScope {
+    int saved = 0;
+    explicit ThreadScope(int n) {
+      if (n > 0) { saved = max_threads(); set_num_threads(n); }
+    }
+    ~ThreadScope() { if (saved > 0) set_num_threads(saved); }
+  };
+
+  static std::size_t scene_index(const RenderRequest& q, std::size_t k) {
+    return q.subset ? static_cast<std::size_t>((*q.subset)[k]) : k;
+  }
+
+  // Boundary checks: the request names a scene and a valid camera, subset indices and the
+  // log-scale override fit the scene.
+  static const Camera& check(const RenderRequest& q) {
+    if (!q.scene || !q.camera) throw Error("request needs a scene and a camera", "RenderRequest");
+    const Camera& cam = *q.camera;
+    cam.validate();
+    if (cam.width > (1 << 20) || cam.height > (1 << 20) ||
+        static_cast<std::int64_t>(cam.width) * cam.height > (std::int64_t{1} << 31) - 1)
+      throw Error("image larger than the CPU renderer supports (2^31 pixels)", "view '" + cam.name + "'");
+    const GaussianScene& sc = *q.scene;
+    const std::size_t n = sc.size();
+    for (int d = 0; d < 3; ++d)
+      if (sc.mean[d].size() != n || sc.log_scale[d].size() != n)
+        throw Error("scene columns disagree in size", "scene");
+    for (int c = 0; c < 4; ++c)
+      if (sc.rotation[c].size() != n) throw Error("scene columns disagree in size", "scene");
+    if (sc.sh_degree < 0 || sc.sh_degree > 3 || sc.sh.size() != n * static_cast<std::size_t>(sc.sh_coeffs()) * 3)
+      throw Error("SH degree must be 0..3 with (degree+1)^2 x 3 coefficients per Gaussian", "scene");
+    std::size_t drawn = n;
+    if (q.subset) {
+      drawn = q.subset->size();
+      for (std::size_t k = 0; k < drawn; ++k)
+        if ((*q.subset)[k] >= n)
+          throw Error("subset index " + std::to_string((*q.subset)[k]) + " out of range (scene has " +
+                      std::to_string(n) + ")", "RenderRequest::subset");
+    }
+    if (drawn >= (std::size_t{1} << 32)) throw Error("more than 2^32 drawn Gaussians", "RenderRequest");
+    if (q.log_scale)
+      for (int d = 0; d < 3; ++d)
+        if ((*q.log_scale)[d].size() != drawn)
+          throw Error("log-scale column " + std::to_string(d) + " has " +
+                      std::to_string((*q.log_scale)[d].size()) + " values, expected " + std::to_string(drawn),
+                      "RenderRequest::log_scale");
+    return cam;
+  }
+
+  static void tile_extent(std::int64_t t, int W, int H, int& x0, int& y0, int& w, int& h) {
+    const int tiles_x = (W + tile_size - 1) / tile_size;
+    x0 = static_cast<int>(t % tiles_x) * tile_size;
+    y0 = static_cast<int>(t / tiles_x) * tile_size;
+    w = std::min(tile_size, W - x0);
+    h = std::min(tile_size, H - y0);
+  }
+
+  // Projects every drawn Gaussian (one result per index, any thread count) and bins the tiles.
+  void prepare(const RenderRequest& q, bool colour) {
+    const GaussianScene& sc = *q.scene;
+    const Camera& cam = *q.camera;
+    const std::size_t n = q.subset ? q.subset->size() : sc.size();
+    splats_.resize(n);
+    const int tiles_x = (cam.width + tile_size - 1) / tile_size;
+    const int tiles_y = (cam.height + tile_size - 1) / tile_size;
+    const Eigen::Vector3f eye = cam.position();
+    const std::size_t B3 = static_cast<std::size_t>(sc.sh_coeffs()) * 3;
+    ProjectedSplats& s = splats_;
+    const ProjectionParams& pp = opt_.projection;
+    parallel_chunks(static_cast<std::int64_t>(n), 4096, [&](std::int64_t, std::int64_t b, std::int64_t e) {
+      for (std::int64_t k = b; k < e; ++k) {
+        const std::size_t i = scene_index(q, static_cast<std::size_t>(k));
+        Eigen::Vector3f log_s;
+        for (int d = 0; d < 3; ++d) log_s[d] = q.log_scale ? (*q.log_scale)[d][k] : sc.log_scale[d][i];
+        const Eigen::Vector3f mu = sc.mu(i);
+        const float opacity = sc.opacity(i);
+        const ProjectedGaussian g = project_gaussian(cam, mu, sc.R(i), log_s.array().exp().matrix(), opacity, pp);
+        s.tx0[k] = s.tx1[k] = s.ty0[k] = s.ty1[k] = 0;
+        if (!g.valid || !g.on_screen) continue;  // culled (gsplat)
+        const Eigen::Vector3f rgb = colour ? sh_to_rgb(sc.sh_degree, sc.sh.data() + i * B3, mu - eye)
+                                           : Eigen::Vector3f::Zero();
+        PackedSplat& ps = s.splat[k];
+        ps = {g.mean.x(), g.mean.y(), static_cast<float>(g.radius_x), static_cast<float>(g.radius_y),
+              g.conic[0], g.conic[1], g.conic[2], std::log(opacity / pp.alpha_min), opacity, g.depth,
+              rgb[0], rgb[1], rgb[2]};
+        tile_rect(ps.mx, ps.rx, tiles_x, s.tx0[k], s.tx1[k]);
+        tile_rect(ps.my, ps.ry, tiles_y, s.ty0[k], s.ty1[k]);
+      }
+    });
+    bin_tiles(splats_, cam.width, cam.height, bins_);
+  }
+
+  TiledRendererOptions opt_{};
+  ProjectedSplats splats_;
+  TileBins bins_;
+  std::vector<float> entry_w_, entry_wfg_;  // per (tile, splat) entry partial sums
+};
+
+static_assert(ContributionRenderer<TiledRenderer>);
+
+}  // namespace vcar::cpu
