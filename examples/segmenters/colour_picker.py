@@ -1,0 +1,148 @@
+#!/usr/bin/python3
+"""A tiny segmenter for the vcar external-segmenter protocol (docs/cli.md), standard library only.
+
+It picks the colour of frame 0 at the first positive prompt point and marks, in every frame,
+the pixels whose colour is within --tol of it (max channel difference). Good enough for the
+synthetic scenes, whose target has its own colour; used by the protocol tests.
+
+    colour_picker.py [--tol T] [--fail STATUS] [--sleep S] [--bad-size] [--garbage]
+                     [--skip K] REQUEST_DIR
+
+Misbehaviours for tests: --fail exits with STATUS before writing anything, --sleep waits S
+seconds first, --bad-size writes frame 0's mask one pixel too wide, --garbage writes a mask file
+that is not a PNG, --skip K writes no mask for frame K.
+"""
+import json
+import os
+import struct
+import sys
+import time
+import zlib
+
+
+def read_png(path):
+    """Decodes an 8-bit, non-interlaced PNG (grey, grey+alpha, RGB, RGBA) -> (w, h, c, rows)."""
+    with open(path, "rb") as f:
+        data = f.read()
+    if data[:8] != b"\x89PNG\r\n\x1a\n":
+        raise ValueError(path + ": not a PNG")
+    pos, idat, w = 8, b"", None
+    while pos < len(data):
+        (n,) = struct.unpack(">I", data[pos:pos + 4])
+        kind, body = data[pos + 4:pos + 8], data[pos + 8:pos + 8 + n]
+        pos += 12 + n
+        if kind == b"IHDR":
+            w, h, depth, ctype, _, _, interlace = struct.unpack(">IIBBBBB", body)
+            if depth != 8 or interlace != 0 or ctype not in (0, 2, 4, 6):
+                raise ValueError(path + ": unsupported PNG layout")
+            c = {0: 1, 2: 3, 4: 2, 6: 4}[ctype]
+        elif kind == b"IDAT":
+            idat += body
+        elif kind == b"IEND":
+            break
+    raw = zlib.decompress(idat)
+    stride = w * c
+    rows, prev = [], bytearray(stride)
+    for y in range(h):
+        ftype = raw[y * (stride + 1)]
+        line = bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+        for x in range(stride):
+            a = line[x - c] if x >= c else 0
+            b = prev[x]
+            cc = prev[x - c] if x >= c else 0
+            if ftype == 1:
+                line[x] = (line[x] + a) & 255
+            elif ftype == 2:
+                line[x] = (line[x] + b) & 255
+            elif ftype == 3:
+                line[x] = (line[x] + (a + b) // 2) & 255
+            elif ftype == 4:
+                p = a + b - cc
+                pa, pb, pc = abs(p - a), abs(p - b), abs(p - cc)
+                pred = a if pa <= pb and pa <= pc else (b if pb <= pc else cc)
+                line[x] = (line[x] + pred) & 255
+        rows.append(line)
+        prev = line
+    return w, h, c, rows
+
+
+def write_png_grey(path, w, h, rows):
+    def chunk(kind, body):
+        return (struct.pack(">I", len(body)) + kind + body +
+                struct.pack(">I", zlib.crc32(kind + body) & 0xFFFFFFFF))
+    raw = b"".join(b"\x00" + bytes(r) for r in rows)
+    png = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 0, 0, 0, 0)) +
+           chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+    tmp = path + ".part"
+    with open(tmp, "wb") as f:
+        f.write(png)
+    os.replace(tmp, path)
+
+
+def main(argv):
+    tol, fail, sleep, bad_size, garbage, skip = 40, None, 0.0, False, False, -1
+    args = argv[1:]
+    while len(args) > 1:
+        a = args.pop(0)
+        if a == "--tol":
+            tol = int(args.pop(0))
+        elif a == "--fail":
+            fail = int(args.pop(0))
+        elif a == "--sleep":
+            sleep = float(args.pop(0))
+        elif a == "--bad-size":
+            bad_size = True
+        elif a == "--garbage":
+            garbage = True
+        elif a == "--skip":
+            skip = int(args.pop(0))
+        else:
+            print("colour_picker: unknown option " + a, file=sys.stderr)
+            return 64
+    if len(args) != 1:
+        print("usage: colour_picker.py [options] REQUEST_DIR", file=sys.stderr)
+        return 64
+    req = args[0]
+    if sleep > 0:
+        time.sleep(sleep)
+    if fail is not None:
+        print("colour_picker: failing on purpose with status %d" % fail, file=sys.stderr)
+        return fail
+    with open(os.path.join(req, "prompt.json")) as f:
+        prompt = json.load(f)
+    with open(os.path.join(req, "cameras.json")) as f:
+        cams = json.load(f)
+    pts = [p for p, l in zip(prompt["points"], prompt["point_labels"]) if l == 1]
+    if not pts:
+        print("colour_picker: needs a positive point", file=sys.stderr)
+        return 2
+    os.makedirs(os.path.join(req, "masks"), exist_ok=True)
+    target = None
+    for k, cam in enumerate(cams):
+        stem = cam["img_name"]
+        w, h, c, rows = read_png(os.path.join(req, "frames", stem + ".png"))
+        if target is None:  # frame 0 is the reference view of the prompt
+            u, v = int(pts[0][0]), int(pts[0][1])
+            target = rows[v][u * c:u * c + 3]
+        out = os.path.join(req, "masks", stem + ".png")
+        if k == skip:
+            continue
+        if garbage and k == 0:
+            with open(out, "wb") as f:
+                f.write(b"this is not a png")
+            continue
+        mask = []
+        for r in rows:
+            mask.append(bytearray(
+                255 if max(abs(r[x * c + i] - target[i]) for i in range(3)) <= tol else 0
+                for x in range(w)))
+        if bad_size and k == 0:
+            mask = [m + b"\x00" for m in mask]
+            w += 1
+        write_png_grey(out, w, h, mask)
+    print("colour_picker: %d frames, colour %s" % (len(cams), list(target)))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))

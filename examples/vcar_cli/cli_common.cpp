@@ -1,0 +1,327 @@
+#include "cli_common.hpp"
+
+#include <signal.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <iostream>
+#include <type_traits>
+
+#include "vcar/core/parallel.hpp"
+#include "vcar/io/atomic_file.hpp"
+#include "vcar/io/json_file.hpp"
+#include "vcar/io/ply.hpp"
+
+namespace vcar::cli {
+
+std::atomic<bool>& interrupted() {
+  static std::atomic<bool> flag{false};
+  return flag;
+}
+
+namespace {
+extern "C" void on_signal(int sig) {
+  interrupted().store(true);
+  ::signal(sig, SIG_DFL);  // a second Ctrl-C ends the program at once
+}
+}  // namespace
+
+void install_signal_handlers() {
+  ::signal(SIGINT, on_signal);
+  ::signal(SIGTERM, on_signal);
+}
+
+// ---- progress ------------------------------------------------------------------------------
+ProgressLine::ProgressLine(bool quiet) : active_(!quiet && ::isatty(STDERR_FILENO)) {}
+ProgressLine::~ProgressLine() { done(); }
+
+bool ProgressLine::operator()(const Progress& p) {
+  if (active_) {
+    char buf[160];
+    if (p.views > 0)
+      std::snprintf(buf, sizeof buf, "\r\033[K[vcar] %-18.*s view %zu/%zu  %7.1f s",
+                    static_cast<int>(p.stage.size()), p.stage.data(), p.view, p.views, p.elapsed_s);
+    else
+      std::snprintf(buf, sizeof buf, "\r\033[K[vcar] %-18.*s %7.1f s",
+                    static_cast<int>(p.stage.size()), p.stage.data(), p.elapsed_s);
+    std::fputs(buf, stderr);
+    std::fflush(stderr);
+    dirty_ = true;
+  }
+  return !interrupted().load();
+}
+
+void ProgressLine::message(const std::string& line) {
+  if (!active_) return;
+  std::fprintf(stderr, "\r\033[K[vcar] %s", line.c_str());
+  std::fflush(stderr);
+  dirty_ = true;
+}
+
+void ProgressLine::done() {
+  if (active_ && dirty_) {
+    std::fputs("\r\033[K", stderr);
+    std::fflush(stderr);
+  }
+  dirty_ = false;
+}
+
+// ---- files ---------------------------------------------------------------------------------
+nlohmann::json read_json(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw CliError(exit_bad_input, "cannot open the file", file.string());
+  try {
+    return nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw CliError(exit_bad_input, std::string("not valid JSON: ") + e.what(), file.string());
+  }
+}
+
+void write_json(const std::filesystem::path& file, const nlohmann::json& j) {
+  try {
+    io::atomic_write(file, [&](std::ostream& out) { out << j.dump(1) << '\n'; });
+  } catch (const Error& e) {
+    throw CliError(exit_output, e.what());
+  }
+}
+
+void make_output_dir(const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec || !std::filesystem::is_directory(dir))
+    throw CliError(exit_output, "cannot create the output directory" + (ec ? ": " + ec.message() : ""),
+                   dir.string());
+}
+
+nlohmann::json selection_json(const Selection& s) {
+  nlohmann::json ls = nlohmann::json::array();
+  if (s.has_log_scales())
+    for (std::size_t k = 0; k < s.indices.size(); ++k)
+      ls.push_back({s.log_scale[0][k], s.log_scale[1][k], s.log_scale[2][k]});
+  return {{"indices", s.indices}, {"scores", s.scores}, {"log_scales", ls},
+          {"scene_gaussians", s.scene_gaussians}};
+}
+
+Selection read_selection(const std::filesystem::path& file, std::size_t scene_size) {
+  const nlohmann::json j = read_json(file);
+  const std::string where = file.string();
+  Selection s;
+  try {
+    if (!j.is_object() || !j.contains("indices") || !j["indices"].is_array())
+      throw CliError(exit_bad_input, "expected an object with an \"indices\" array", where);
+    s.indices = j["indices"].get<std::vector<Index>>();
+    if (j.contains("scores") && j["scores"].is_array()) s.scores = j["scores"].get<std::vector<float>>();
+    if (j.contains("scene_gaussians") && j["scene_gaussians"].is_number_unsigned())
+      s.scene_gaussians = j["scene_gaussians"].get<std::size_t>();
+    if (j.contains("log_scales") && j["log_scales"].is_array() && !j["log_scales"].empty()) {
+      const auto& ls = j["log_scales"];
+      if (ls.size() != s.indices.size())
+        throw CliError(exit_bad_input, "\"log_scales\" has " + std::to_string(ls.size()) +
+                                           " entries, \"indices\" " + std::to_string(s.indices.size()), where);
+      for (auto& c : s.log_scale) c.resize(ls.size());
+      for (std::size_t k = 0; k < ls.size(); ++k) {
+        if (!ls[k].is_array() || ls[k].size() != 3)
+          throw CliError(exit_bad_input, "\"log_scales\"[" + std::to_string(k) + "] is not [l0, l1, l2]", where);
+        for (int d = 0; d < 3; ++d) s.log_scale[d][k] = ls[k][d].get<float>();
+      }
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw CliError(exit_bad_input, std::string("malformed selection: ") + e.what(), where);
+  }
+  if (!s.scores.empty() && s.scores.size() != s.indices.size())
+    throw CliError(exit_bad_input, "\"scores\" and \"indices\" differ in length", where);
+  for (std::size_t k = 1; k < s.indices.size(); ++k)
+    if (s.indices[k] <= s.indices[k - 1])
+      throw CliError(exit_bad_input, "\"indices\" must be strictly ascending (entry " + std::to_string(k) + ")", where);
+  if (scene_size > 0) {
+    if (s.scene_gaussians != 0 && s.scene_gaussians != scene_size)
+      throw CliError(exit_bad_input, "selection was made on a scene of " + std::to_string(s.scene_gaussians) +
+                                         " Gaussians, this scene has " + std::to_string(scene_size), where);
+    if (!s.indices.empty() && s.indices.back() >= scene_size)
+      throw CliError(exit_bad_input, "index " + std::to_string(s.indices.back()) + " out of range (" +
+                                         std::to_string(scene_size) + " Gaussians)", where);
+  }
+  return s;
+}
+
+// ---- parsing -------------------------------------------------------------------------------
+namespace {
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::string cur;
+  std::istringstream in(s);
+  while (std::getline(in, cur, sep)) out.push_back(cur);
+  if (!s.empty() && s.back() == sep) out.emplace_back();
+  return out;
+}
+float parse_float(std::string s, const std::string& where) {
+  s.erase(0, s.find_first_not_of(" \t"));
+  s.erase(s.find_last_not_of(" \t") + 1);
+  errno = 0;
+  char* end = nullptr;
+  const float v = std::strtof(s.c_str(), &end);
+  if (s.empty() || end != s.c_str() + s.size() || errno != 0 || !std::isfinite(v))
+    throw CliError(exit_usage, "expected a number, got '" + s + "'", where);
+  return v;
+}
+}  // namespace
+
+void parse_points(const std::string& text, Prompt& prompt, const std::string& where) {
+  for (const std::string& item : split(text, ';')) {
+    if (item.find_first_not_of(" \t") == std::string::npos) continue;
+    const auto f = split(item, ',');
+    if (f.size() != 2 && f.size() != 3)
+      throw CliError(exit_usage, "expected u,v or u,v,label; got '" + item + "'", where);
+    prompt.points.emplace_back(parse_float(f[0], where), parse_float(f[1], where));
+    int label = 1;
+    if (f.size() == 3) {
+      const float l = parse_float(f[2], where);
+      if (l != 0.f && l != 1.f) throw CliError(exit_usage, "label must be 1 or 0, got '" + f[2] + "'", where);
+      label = static_cast<int>(l);
+    }
+    prompt.point_labels.push_back(label);
+  }
+  if (prompt.points.empty()) throw CliError(exit_usage, "no point given", where);
+}
+
+Eigen::Vector4f parse_box(const std::string& text, const std::string& where) {
+  const auto f = split(text, ',');
+  if (f.size() != 4) throw CliError(exit_usage, "expected x0,y0,x1,y1; got '" + text + "'", where);
+  Eigen::Vector4f b;
+  for (int k = 0; k < 4; ++k) b[k] = parse_float(f[k], where);
+  if (!(b[2] > b[0] && b[3] > b[1])) throw CliError(exit_usage, "box must have x1 > x0 and y1 > y0", where);
+  return b;
+}
+
+Eigen::Vector3f parse_rgb(const std::string& text, const std::string& where) {
+  const auto f = split(text, ',');
+  if (f.size() != 3) throw CliError(exit_usage, "expected r,g,b; got '" + text + "'", where);
+  Eigen::Vector3f c;
+  for (int k = 0; k < 3; ++k) {
+    c[k] = parse_float(f[k], where);
+    if (!(c[k] >= 0.f && c[k] <= 1.f)) throw CliError(exit_usage, "colour channels must be in [0, 1]", where);
+  }
+  return c;
+}
+
+std::size_t find_view(const std::vector<Camera>& cams, const std::string& name, const std::string& where) {
+  for (std::size_t k = 0; k < cams.size(); ++k)
+    if (cams[k].name == name) return k;
+  // Also accept the name without its extension ("frame_001" for "frame_001.png") and vice versa.
+  auto stem = [](const std::string& s) { return std::filesystem::path(s).stem().string(); };
+  for (std::size_t k = 0; k < cams.size(); ++k)
+    if (stem(cams[k].name) == stem(name)) return k;
+  std::string names;
+  for (std::size_t k = 0; k < cams.size() && k < 6; ++k) names += (k ? ", " : "") + cams[k].name;
+  if (cams.size() > 6) names += ", ... (" + std::to_string(cams.size()) + " views)";
+  throw CliError(exit_bad_input, "no view named '" + name + "'; views: " + names, where);
+}
+
+VcarParams make_params(const std::string& preset, const std::vector<std::string>& sets) {
+  VcarParams p;
+  if (preset == "nvos") p = VcarParams::nvos();
+  else if (preset == "lerf") p = VcarParams::lerf();
+  else if (preset == "reference_code") p = VcarParams::reference_code();
+  else throw CliError(exit_usage, "unknown preset '" + preset + "'; valid: nvos, lerf, reference_code", "--preset");
+  for (const std::string& s : sets) p.set(s);  // vcar::Error naming the key -> exit 2
+  p.validate();
+  return p;
+}
+
+namespace {
+template <class T>
+nlohmann::json field_json(const T& v) {
+  if constexpr (std::is_same_v<T, float>) {
+    return io::json_float(v);  // 0.7, not 0.699999988
+  } else if constexpr (std::is_same_v<T, bool> || std::is_arithmetic_v<T>) {
+    return v;
+  } else if constexpr (std::is_same_v<T, Eigen::Vector3f>) {
+    return {io::json_float(v[0]), io::json_float(v[1]), io::json_float(v[2])};
+  } else if constexpr (std::is_enum_v<T>) {
+    // Enum names as --set accepts them.
+    if constexpr (std::is_same_v<T, SpiralVariant> || std::is_same_v<T, AbrVariant>)
+      return static_cast<int>(v) == 0 ? "Paper" : "ReferenceCode";
+    else if constexpr (std::is_same_v<T, SampledIntrinsics>)
+      return v == SampledIntrinsics::ReferenceView ? "ReferenceView" : "ReferenceCode45Fov";
+    else
+      return static_cast<int>(v);
+  } else {
+    return nullptr;
+  }
+}
+}  // namespace
+
+nlohmann::json params_json(const VcarParams& p) {
+  nlohmann::json j = nlohmann::json::object();
+  VcarParams::for_each_field(p, [&](const char* name, const auto& field) { j[name] = field_json(field); });
+  return j;
+}
+
+double peak_rss_mib() {
+  rusage ru{};
+  ::getrusage(RUSAGE_SELF, &ru);
+  return static_cast<double>(ru.ru_maxrss) / 1024.0;  // Linux: KiB
+}
+
+nlohmann::json write_segmentation(const std::filesystem::path& out, const GaussianScene& scene,
+                                  const SegmentationResult& r, const VcarParams& params,
+                                  const nlohmann::json& inputs) {
+  const Diagnostics& d = r.diagnostics;
+  // The rest of the scene: every index not selected, ascending.
+  std::vector<Index> rest;
+  rest.reserve(scene.size() - r.indices.size());
+  for (std::size_t i = 0, k = 0; i < scene.size(); ++i) {
+    if (k < r.indices.size() && r.indices[k] == i) { ++k; continue; }
+    rest.push_back(static_cast<Index>(i));
+  }
+  try {
+    io::write_ply(out / "object.ply", scene, r.indices, r.log_scale[0].empty() ? nullptr : &r.log_scale);
+    io::write_ply(out / "removed.ply", scene, rest);
+  } catch (const Error& e) {
+    throw CliError(exit_output, e.what());
+  }
+  Selection sel;
+  sel.indices = r.indices;
+  sel.scores = r.scores;
+  sel.log_scale = r.log_scale;
+  sel.scene_gaussians = scene.size();
+  write_json(out / "selection.json", selection_json(sel));
+
+  nlohmann::json timings = nlohmann::json::object();
+  for (const auto& [stage, s] : d.timings_s) timings[stage] = s;
+  nlohmann::json sampled = nlohmann::json::array();
+  for (const Camera& c : d.sampled_cameras) {
+    const Eigen::Vector3f p = c.position();
+    sampled.push_back({p.x(), p.y(), p.z()});
+  }
+  nlohmann::json report = {
+      {"inputs", inputs},
+      {"parameters", params_json(params)},
+      {"counts", {{"scene", scene.size()}, {"coarse", d.n_coarse}, {"fine", d.n_fine},
+                  {"final", d.n_final}, {"removed", rest.size()}}},
+      {"valid_cameras", d.valid_cameras},
+      {"max_gap_deg", d.max_gap_deg},
+      {"gap_direction", {d.gap_direction.x(), d.gap_direction.y(), d.gap_direction.z()}},
+      {"sss_triggered", d.sss_triggered},
+      {"sphere", {{"center", {d.sphere.c.x(), d.sphere.c.y(), d.sphere.c.z()}}, {"radius", d.sphere.r},
+                  {"inliers", d.sphere.inliers}}},
+      {"sampled_views", d.sampled_cameras.size()},
+      {"sampled_positions", sampled},
+      {"abr", {{"flagged", d.abr_flagged}, {"compressed", d.abr_compressed}}},
+      {"masks_missing", d.masks_missing},
+      {"note", d.note},
+      {"timings_s", timings},
+      {"threads", max_threads()},
+      {"peak_rss_mib", peak_rss_mib()},
+      {"outputs", {{"object", "object.ply"}, {"removed", "removed.ply"}, {"selection", "selection.json"}}},
+  };
+  write_json(out / "report.json", report);
+  return report;
+}
+
+}  // namespace vcar::cli

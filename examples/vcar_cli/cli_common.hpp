@@ -1,0 +1,105 @@
+#pragma once
+// Shared pieces of the `vcar` program: exit codes, the terminal progress line, Ctrl-C,
+// selection files and small parsers. Every error names the file, view or parameter at fault.
+#include <atomic>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "vcar/algo/params.hpp"
+#include "vcar/algo/pipeline.hpp"
+#include "vcar/concepts/segmenter.hpp"
+#include "vcar/core/camera.hpp"
+#include "vcar/core/error.hpp"
+#include "vcar/core/gaussian_scene.hpp"
+
+namespace vcar::cli {
+
+// Exit codes (docs/cli.md). CLI11 reports usage errors itself with 1... see main.cpp.
+enum ExitCode : int {
+  exit_ok = 0,
+  exit_usage = 1,          // bad command line (unknown flag, missing value, conflicting options)
+  exit_bad_input = 2,      // a file, view or parameter is wrong (the message names it)
+  exit_segmenter = 3,      // the external segmenter failed, timed out or wrote a bad mask
+  exit_cancelled = 4,      // interrupted (Ctrl-C / SIGTERM)
+  exit_output = 5,         // an output could not be written
+  exit_internal = 70,      // a bug or resource exhaustion (out of memory)
+};
+
+// An error with its exit code decided where it is raised.
+struct CliError : Error {
+  int code;
+  CliError(int c, const std::string& message, const std::string& where = {})
+      : Error(message, where), code(c) {}
+};
+
+// Set by SIGINT/SIGTERM; the pipeline's progress callback and the external segmenter poll it.
+std::atomic<bool>& interrupted();
+void install_signal_handlers();
+
+// One status line on a terminal (stderr is a tty), nothing otherwise.
+class ProgressLine {
+public:
+  explicit ProgressLine(bool quiet);
+  ~ProgressLine();
+  // The pipeline callback: prints, and returns false once interrupted (cancels the pipeline).
+  bool operator()(const Progress& p);
+  void message(const std::string& line);  // a stage outside the pipeline ("reading scene")
+  void done();                            // clears the line
+  bool active() const { return active_; }
+  ProgressCallback callback() { return [this](const Progress& p) { return (*this)(p); }; }
+
+private:
+  bool active_ = false, dirty_ = false;
+};
+
+// ---- files ---------------------------------------------------------------------------------
+nlohmann::json read_json(const std::filesystem::path& file);
+// Atomic write of a JSON document (indent 1), exit_output on failure.
+void write_json(const std::filesystem::path& file, const nlohmann::json& j);
+// Creates the output directory (and parents); exit_output naming it on failure.
+void make_output_dir(const std::filesystem::path& dir);
+
+// selection.json: {"indices": [...ascending], "scores": [...], "log_scales": [[l0,l1,l2], ...],
+// "scene_gaussians": n}. Scores and log_scales are aligned with indices.
+struct Selection {
+  std::vector<Index> indices;
+  std::vector<float> scores;
+  LogScales log_scale;        // empty columns: the scene's own scales
+  std::size_t scene_gaussians = 0;  // 0 = unknown
+  bool has_log_scales() const { return !log_scale[0].empty(); }
+};
+nlohmann::json selection_json(const Selection& s);
+// Reads and checks a selection (ascending unique indices, aligned arrays); `scene_size` > 0
+// also checks every index against the scene. Errors name the file.
+Selection read_selection(const std::filesystem::path& file, std::size_t scene_size = 0);
+
+// ---- parsing -------------------------------------------------------------------------------
+// "u,v;u,v,0": points, label 1 unless a third value says 0 (negative). Errors name `where`.
+void parse_points(const std::string& text, Prompt& prompt, const std::string& where = "--points");
+// "x0,y0,x1,y1".
+Eigen::Vector4f parse_box(const std::string& text, const std::string& where = "--box");
+// "r,g,b" in [0,1].
+Eigen::Vector3f parse_rgb(const std::string& text, const std::string& where);
+// Index of the camera named `name`; the error lists some of the names that exist.
+std::size_t find_view(const std::vector<Camera>& cams, const std::string& name, const std::string& where);
+// The parameters of a preset, then each "key=value" (errors name the key).
+VcarParams make_params(const std::string& preset, const std::vector<std::string>& sets);
+nlohmann::json params_json(const VcarParams& p);
+
+double peak_rss_mib();
+
+// ---- outputs shared by `segment` and `demo` -------------------------------------------------
+// Writes object.ply, removed.ply, selection.json and report.json into `out`, and returns the
+// report (the caller may add keys, e.g. metrics, and write it again).
+nlohmann::json write_segmentation(const std::filesystem::path& out, const GaussianScene& scene,
+                                  const SegmentationResult& r, const VcarParams& params,
+                                  const nlohmann::json& inputs);
+
+}  // namespace vcar::cli

@@ -1,0 +1,195 @@
+// `vcar segment`: the full pipeline on a scene file, its cameras and a source of masks.
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <optional>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "cli_common.hpp"
+#include "commands.hpp"
+#include "scene_inputs.hpp"
+#include "vcar/algo/pipeline.hpp"
+#include "vcar/backends/cpu/tiled_renderer.hpp"
+#include "vcar/io/external_segmenter.hpp"
+#include "vcar/io/image_file.hpp"
+#include "vcar/io/mask_folder_segmenter.hpp"
+#include "vcar/synth/oracle_segmenter.hpp"
+
+namespace fs = std::filesystem;
+
+namespace vcar::cli {
+
+namespace {
+
+// The training views' photographs stand in for renders of the whole scene (the coarse round);
+// renders of subsets (SSS views of G_coarse, the fine round) and unknown cameras go to the
+// CPU renderer. Files are matched to views up front, so a missing image fails before any work.
+class PhotoRenderer {
+public:
+  PhotoRenderer(cpu::TiledRenderer& inner, const fs::path& dir, const std::vector<Camera>& cams)
+      : inner_(&inner) {
+    if (!fs::is_directory(dir)) throw CliError(exit_bad_input, "not a directory", dir.string() + " (--images)");
+    for (const Camera& c : cams) {
+      const fs::path f = find_image(dir, c.name);
+      if (f.empty())
+        throw CliError(exit_bad_input, "no image for view '" + c.name + "' (tried the name with and without "
+                                       ".png/.jpg/.jpeg)", dir.string() + " (--images)");
+      files_[c.name] = f;
+    }
+  }
+
+  RenderOutput render(const RenderRequest& q) {
+    const auto it = files_.find(q.camera->name);
+    if (q.subset || q.log_scale || it == files_.end()) return inner_->render(q);
+    const ImageRGB8 img = io::read_image_rgb8(it->second);
+    const Camera& c = *q.camera;
+    if (img.width != c.width || img.height != c.height)
+      throw CliError(exit_bad_input, "image is " + std::to_string(img.width) + "x" + std::to_string(img.height) +
+                                         ", view '" + c.name + "' is " + std::to_string(c.width) + "x" +
+                                         std::to_string(c.height) + " (images are not resized)",
+                     it->second.string());
+    RenderOutput out;
+    out.rgb = ImageF(img.width, img.height, 3);
+    for (std::size_t k = 0; k < img.data.size(); ++k) out.rgb.data[k] = static_cast<float>(img.data[k]) / 255.f;
+    out.alpha = ImageF(img.width, img.height, 1, 1.f);
+    if (q.want_depth) out.depth = inner_->render(q).depth;
+    return out;
+  }
+
+  static fs::path find_image(const fs::path& dir, const std::string& name) {
+    std::error_code ec;
+    const fs::path direct = dir / name;
+    if (fs::is_regular_file(direct, ec)) return direct;
+    const std::string stem = fs::path(name).stem().string();
+    for (const char* ext : {".png", ".jpg", ".jpeg", ".PNG", ".JPG", ".JPEG"}) {
+      for (const std::string& base : {name, stem}) {
+        const fs::path f = dir / (base + ext);
+        if (fs::is_regular_file(f, ec)) return f;
+      }
+    }
+    return {};
+  }
+
+private:
+  cpu::TiledRenderer* inner_;
+  std::unordered_map<std::string, fs::path> files_;
+};
+static_assert(Renderer<PhotoRenderer>);
+
+// The pipeline with any renderer and segmenter; maps failures of the segmenter to exit codes.
+template <class R, class S>
+SegmentationResult run_pipeline(const GaussianScene& scene, const std::vector<Camera>& cams,
+                                const Prompt& prompt, R& renderer, S& segmenter,
+                                const VcarParams& params, ProgressLine& progress,
+                                const io::ExternalSegmenter* external) {
+  try {
+    return segment(scene, cams, prompt, renderer, segmenter, params, progress.callback());
+  } catch (const Cancelled&) {
+    throw;
+  } catch (const CliError&) {
+    throw;
+  } catch (const Error& e) {
+    if (external && external->failure() == io::ExternalSegmenter::Failure::cancelled)
+      throw CliError(exit_cancelled, e.what());
+    if (external && external->failure() != io::ExternalSegmenter::Failure::none)
+      throw CliError(exit_segmenter, e.what());
+    if (interrupted().load()) throw CliError(exit_cancelled, e.what());
+    throw;
+  }
+}
+
+}  // namespace
+
+int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
+  ProgressLine progress(g.quiet);
+  const fs::path out = o.out;
+
+  // Inputs first (cheap checks before expensive reads), then the scene.
+  VcarParams params = make_params(o.preset, o.sets);
+  Prompt prompt;
+  if (!o.points.empty()) parse_points(o.points, prompt);
+  if (!o.box.empty()) prompt.box = parse_box(o.box);
+  prompt.text = o.text;
+  if (!o.segmenter_cmd.empty() && prompt.points.empty() && !prompt.box && prompt.text.empty())
+    throw CliError(exit_usage, "an external segmenter needs a prompt: --points, --box or --text", "--segmenter-cmd");
+
+  progress.message("reading cameras");
+  const std::vector<Camera> cams = load_cameras(o.cameras);
+  prompt.reference_view = find_view(cams, o.prompt_view, "--prompt-view");
+  const Camera& ref = cams[prompt.reference_view];
+  for (std::size_t k = 0; k < prompt.points.size(); ++k)
+    if (!inside_image(prompt.points[k].x(), prompt.points[k].y(), ref.width, ref.height))
+      throw CliError(exit_bad_input, "point " + std::to_string(k) + " lies outside view '" + ref.name + "' (" +
+                                         std::to_string(ref.width) + "x" + std::to_string(ref.height) + ")",
+                     "--points");
+  progress.message("reading scene");
+  const GaussianScene scene = load_scene(o.scene);
+  make_output_dir(out);
+
+  cpu::TiledRenderer cpu_renderer;
+  std::optional<PhotoRenderer> photos;
+  if (!o.images.empty()) photos.emplace(cpu_renderer, o.images, cams);
+
+  nlohmann::json inputs = {{"scene", o.scene}, {"cameras", o.cameras}, {"images", o.images},
+                           {"prompt_view", ref.name}, {"preset", o.preset}, {"set", o.sets},
+                           {"views", cams.size()}};
+  nlohmann::json pj = {{"points", nlohmann::json::array()}, {"point_labels", prompt.point_labels},
+                       {"text", prompt.text}};
+  for (const auto& p : prompt.points) pj["points"].push_back({p.x(), p.y()});
+  if (prompt.box) pj["box"] = {(*prompt.box)[0], (*prompt.box)[1], (*prompt.box)[2], (*prompt.box)[3]};
+  inputs["prompt"] = pj;
+
+  auto with_renderer = [&](auto& segmenter, const io::ExternalSegmenter* external) {
+    if (photos) return run_pipeline(scene, cams, prompt, *photos, segmenter, params, progress, external);
+    return run_pipeline(scene, cams, prompt, cpu_renderer, segmenter, params, progress, external);
+  };
+
+  SegmentationResult result;
+  if (!o.masks.empty()) {
+    inputs["masks"] = o.masks;
+    io::MaskFolderSegmenter seg = make_mask_folder(o.masks);
+    result = with_renderer(seg, nullptr);
+  } else if (!o.segmenter_cmd.empty()) {
+    inputs["segmenter_cmd"] = o.segmenter_cmd;
+    io::ExternalSegmenterOptions so;
+    so.timeout_s = o.segmenter_timeout;
+    so.keep_requests = o.keep_requests;
+    so.work_dir = out / "requests";
+    so.inherit_output = o.segmenter_output;
+    so.cancelled = [] { return interrupted().load(); };
+    std::optional<io::ExternalSegmenter> seg;
+    try {
+      seg.emplace(o.segmenter_cmd, so);
+    } catch (const Error& e) {
+      throw CliError(exit_usage, e.what());
+    }
+    result = with_renderer(*seg, &*seg);
+    if (!o.keep_requests) {
+      std::error_code ec;
+      fs::remove(out / "requests", ec);  // only when empty: failed requests stay for inspection
+    }
+  } else {
+    inputs["oracle"] = o.oracle;
+    const OracleDataset ds = load_oracle_dataset(o.oracle);
+    synth::OracleSegmenter seg(ds.world, {}, cpu_renderer);
+    result = with_renderer(seg, nullptr);
+  }
+  progress.done();
+
+  const nlohmann::json report = write_segmentation(out, scene, result, params, inputs);
+  const Diagnostics& d = result.diagnostics;
+  std::printf("selected %zu of %zu Gaussians (coarse %zu, fine %zu); max gap %.1f deg, SSS %s; "
+              "ABR compressed %zu\n",
+              d.n_final, scene.size(), d.n_coarse, d.n_fine, d.max_gap_deg,
+              d.sss_triggered ? "ran" : "skipped", d.abr_compressed);
+  if (!d.note.empty()) std::printf("note: %s\n", d.note.c_str());
+  std::printf("wrote %s/{object.ply, removed.ply, selection.json, report.json}\n", out.string().c_str());
+  (void)report;
+  return exit_ok;
+}
+
+}  // namespace vcar::cli

@@ -1,0 +1,52 @@
+#pragma once
+// The subcommands of `vcar`; each returns its exit code or throws CliError / vcar::Error.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace vcar::cli {
+
+struct GlobalOptions {
+  bool quiet = false;   // no progress line even on a terminal
+  int threads = 0;      // 0: OpenMP's default
+};
+
+struct SegmentOptions {
+  std::string scene, cameras, images, prompt_view, out;
+  std::string masks, segmenter_cmd, oracle;  // exactly one
+  std::string preset = "nvos";
+  std::vector<std::string> sets;
+  std::string points, box, text;
+  double segmenter_timeout = 3600;
+  bool keep_requests = false;
+  bool segmenter_output = false;  // show the segmenter's stdout/stderr instead of logging it
+};
+int run_segment(const SegmentOptions& o, const GlobalOptions& g);
+
+struct RenderOptions {
+  std::string scene, cameras, view, out, alpha, selection, background = "0,0,0";
+};
+int run_render(const RenderOptions& o, const GlobalOptions& g);
+
+struct EvalOptions {
+  std::string dataset, selection;
+  float alpha = 0.5f;
+  bool json = false;
+};
+int run_eval(const EvalOptions& o, const GlobalOptions& g);
+
+struct SynthOptions {
+  std::string rig = "forward", out;
+  std::uint64_t seed = 1;
+  std::size_t gaussians = 20000;
+  int views = 0;         // 0: the rig's default
+  int width = 0, height = 0;  // 0: the rig's default
+};
+int run_synth(const SynthOptions& o, const GlobalOptions& g);
+
+struct DemoOptions {
+  std::string out = "vcar-demo";
+};
+int run_demo(const DemoOptions& o, const GlobalOptions& g);
+
+}  // namespace vcar::cli

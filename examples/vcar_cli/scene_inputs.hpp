@@ -1,0 +1,25 @@
+#pragma once
+// Reading the inputs of the commands: scenes, cameras, mask folders and synthetic datasets.
+// Failures are vcar::Error naming the file (exit code 2).
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "vcar/core/camera.hpp"
+#include "vcar/core/gaussian_scene.hpp"
+#include "vcar/io/mask_folder_segmenter.hpp"
+#include "vcar/synth/world.hpp"
+
+namespace vcar::cli {
+
+GaussianScene load_scene(const std::filesystem::path& ply);
+std::vector<Camera> load_cameras(const std::filesystem::path& path);
+io::MaskFolderSegmenter make_mask_folder(const std::filesystem::path& dir);
+
+// A `vcar synth` dataset's world (primitives, Gaussians, true ids) for the oracle and eval.
+struct OracleDataset {
+  synth::World world;
+};
+OracleDataset load_oracle_dataset(const std::filesystem::path& dir);
+
+}  // namespace vcar::cli

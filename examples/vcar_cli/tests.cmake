@@ -1,0 +1,131 @@
+# CLI tests: each runs the built `vcar` through cli_check.cmake (exit code, files, JSON keys,
+# error text). Included from examples/vcar_cli/CMakeLists.txt when VCAR_BUILD_TESTS is on.
+# Fixtures: cli/synth writes a small dataset that the segment/eval/render tests use.
+set(_cli_work ${CMAKE_CURRENT_BINARY_DIR}/cli_tests)
+set(_cli_check ${CMAKE_CURRENT_SOURCE_DIR}/cli_check.cmake)
+set(_cli_ds ${_cli_work}/dataset)
+set(_picker "/usr/bin/python3 '${PROJECT_SOURCE_DIR}/examples/segmenters/colour_picker.py'")
+
+# vcar_cli_test(NAME <name> ARGS <a|b|c> RC <code> [FIXTURES_SETUP f] [FIXTURES_REQUIRED f]
+#               [CHECKS -DFILES=... -DJSON_KEYS=...])
+function(vcar_cli_test)
+  cmake_parse_arguments(T "" "NAME;ARGS;RC;FIXTURES_SETUP;FIXTURES_REQUIRED" "CHECKS" ${ARGN})
+  add_test(NAME cli/${T_NAME}
+    COMMAND ${CMAKE_COMMAND} -DVCAR=$<TARGET_FILE:vcar_cli> "-DARGS=${T_ARGS}" -DRC=${T_RC} ${T_CHECKS}
+            -P ${_cli_check})
+  set_tests_properties(cli/${T_NAME} PROPERTIES TIMEOUT 120)
+  if(T_FIXTURES_SETUP)
+    set_tests_properties(cli/${T_NAME} PROPERTIES FIXTURES_SETUP ${T_FIXTURES_SETUP})
+  endif()
+  if(T_FIXTURES_REQUIRED)
+    set_tests_properties(cli/${T_NAME} PROPERTIES FIXTURES_REQUIRED "${T_FIXTURES_REQUIRED}")
+  endif()
+endfunction()
+
+# ---- usage ---------------------------------------------------------------------------------
+vcar_cli_test(NAME help ARGS "--help" RC 0)
+vcar_cli_test(NAME usage_missing_option ARGS "segment|--scene|x.ply" RC 1
+  CHECKS "-DSTDERR_HAS=--cameras")
+vcar_cli_test(NAME usage_no_command ARGS "" RC 1)
+vcar_cli_test(NAME usage_two_mask_sources
+  ARGS "segment|--scene|s.ply|--cameras|c.json|--prompt-view|v|--masks|m|--oracle|d|--out|${_cli_work}/x" RC 1)
+
+# ---- demo ----------------------------------------------------------------------------------
+vcar_cli_test(NAME demo ARGS "--quiet|demo|--out|${_cli_work}/demo" RC 0
+  CHECKS "-DCLEAN=${_cli_work}/demo"
+         "-DFILES=${_cli_work}/demo/object.ply|${_cli_work}/demo/removed.ply|${_cli_work}/demo/selection.json|${_cli_work}/demo/before.png|${_cli_work}/demo/after_object.png|${_cli_work}/demo/after_removed.png"
+         "-DJSON_KEYS=${_cli_work}/demo/report.json:parameters,counts,max_gap_deg,sss_triggered,timings_s,peak_rss_mib,metrics|${_cli_work}/demo/selection.json:indices,scores,log_scales"
+         "-DPOSITIVE=${_cli_work}/demo/report.json:counts.final"
+         "-DAT_LEAST=${_cli_work}/demo/report.json:metrics.mIoU:0.8|${_cli_work}/demo/report.json:metrics.f1_3d:0.8|${_cli_work}/demo/report.json:max_gap_deg:90")
+
+# ---- synth (fixture) -----------------------------------------------------------------------
+vcar_cli_test(NAME synth
+  ARGS "synth|--rig|forward|--seed|3|--gaussians|4000|--views|8|--width|160|--height|120|--out|${_cli_ds}" RC 0
+  FIXTURES_SETUP vcar_cli_dataset
+  CHECKS "-DCLEAN=${_cli_ds}"
+         "-DFILES=${_cli_ds}/scene.ply|${_cli_ds}/cameras.json|${_cli_ds}/prompt.json|${_cli_ds}/masks/train_000.png|${_cli_ds}/images/train_000.png|${_cli_ds}/gt/eval_cameras.json"
+         "-DJSON_KEYS=${_cli_ds}/prompt.json:reference_view,points")
+vcar_cli_test(NAME synth_bad_rig ARGS "synth|--rig|moon|--out|${_cli_work}/moon" RC 1
+  CHECKS "-DSTDERR_HAS=--rig")
+
+# ---- segment -------------------------------------------------------------------------------
+set(_seg_common "segment|--scene|${_cli_ds}/scene.ply|--cameras|${_cli_ds}/cameras.json")
+set(_report_keys "parameters,counts,max_gap_deg,sss_triggered,timings_s,peak_rss_mib")
+vcar_cli_test(NAME segment_masks
+  ARGS "${_seg_common}|--masks|${_cli_ds}/masks|--out|${_cli_work}/seg_masks" RC 0
+  FIXTURES_REQUIRED vcar_cli_dataset FIXTURES_SETUP vcar_cli_selection
+  CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DCLEAN=${_cli_work}/seg_masks"
+         "-DFILES=${_cli_work}/seg_masks/object.ply|${_cli_work}/seg_masks/removed.ply"
+         "-DJSON_KEYS=${_cli_work}/seg_masks/report.json:${_report_keys}|${_cli_work}/seg_masks/selection.json:indices,scores,log_scales"
+         "-DPOSITIVE=${_cli_work}/seg_masks/report.json:counts.final")
+vcar_cli_test(NAME segment_segmenter_cmd
+  ARGS "${_seg_common}|--segmenter-cmd|${_picker}|--set|enable_sss=false|--out|${_cli_work}/seg_cmd" RC 0
+  FIXTURES_REQUIRED vcar_cli_dataset
+  CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DCLEAN=${_cli_work}/seg_cmd"
+         "-DJSON_KEYS=${_cli_work}/seg_cmd/report.json:${_report_keys}|${_cli_work}/seg_cmd/selection.json:indices"
+         "-DPOSITIVE=${_cli_work}/seg_cmd/report.json:counts.final")
+vcar_cli_test(NAME segment_oracle
+  ARGS "${_seg_common}|--oracle|${_cli_ds}|--out|${_cli_work}/seg_oracle" RC 0
+  FIXTURES_REQUIRED vcar_cli_dataset
+  CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DCLEAN=${_cli_work}/seg_oracle"
+         "-DPOSITIVE=${_cli_work}/seg_oracle/report.json:counts.final")
+
+vcar_cli_test(NAME segment_images_colmap
+  ARGS "segment|--scene|${_cli_ds}/scene.ply|--cameras|${_cli_ds}|--images|${_cli_ds}/images|--masks|${_cli_ds}/masks|--out|${_cli_work}/seg_images" RC 0
+  FIXTURES_REQUIRED vcar_cli_dataset
+  CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DCLEAN=${_cli_work}/seg_images"
+         "-DPOSITIVE=${_cli_work}/seg_images/report.json:counts.final")
+
+# Bad input: exit 2 and the message names the file / parameter / view.
+vcar_cli_test(NAME segment_missing_scene
+  ARGS "segment|--scene|${_cli_work}/no_such_scene.ply|--cameras|${_cli_ds}/cameras.json|--prompt-view|train_000|--masks|${_cli_ds}/masks|--out|${_cli_work}/bad1" RC 2
+  FIXTURES_REQUIRED vcar_cli_dataset CHECKS "-DSTDERR_HAS=no_such_scene.ply")
+vcar_cli_test(NAME segment_bad_parameter
+  ARGS "${_seg_common}|--prompt-view|train_000|--masks|${_cli_ds}/masks|--set|tau_fine=2|--out|${_cli_work}/bad2" RC 2
+  FIXTURES_REQUIRED vcar_cli_dataset CHECKS "-DSTDERR_HAS=tau_fine")
+vcar_cli_test(NAME segment_unknown_view
+  ARGS "${_seg_common}|--prompt-view|no_such_view|--masks|${_cli_ds}/masks|--out|${_cli_work}/bad3" RC 2
+  FIXTURES_REQUIRED vcar_cli_dataset CHECKS "-DSTDERR_HAS=no_such_view")
+vcar_cli_test(NAME segment_missing_cameras
+  ARGS "segment|--scene|${_cli_ds}/scene.ply|--cameras|${_cli_work}/no_cams.json|--prompt-view|v|--masks|${_cli_ds}/masks|--out|${_cli_work}/bad4" RC 2
+  FIXTURES_REQUIRED vcar_cli_dataset CHECKS "-DSTDERR_HAS=no_cams.json")
+vcar_cli_test(NAME segment_images_missing
+  ARGS "${_seg_common}|--prompt-view|train_000|--images|${_cli_ds}/gt|--masks|${_cli_ds}/masks|--out|${_cli_work}/bad8" RC 2
+  FIXTURES_REQUIRED vcar_cli_dataset CHECKS "-DSTDERR_HAS=--images|train_000")
+# Output not writable: exit 5.
+vcar_cli_test(NAME segment_unwritable_out
+  ARGS "${_seg_common}|--prompt-view|train_000|--masks|${_cli_ds}/masks|--out|/dev/null/vcar_out" RC 5
+  FIXTURES_REQUIRED vcar_cli_dataset CHECKS "-DSTDERR_HAS=/dev/null/vcar_out")
+# Segmenter failure: exit 3 and the message names the round.
+vcar_cli_test(NAME segment_segmenter_fails
+  ARGS "${_seg_common}|--segmenter-cmd|${_picker} --fail 9|--out|${_cli_work}/bad5" RC 3
+  FIXTURES_REQUIRED vcar_cli_dataset
+  CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DSTDERR_HAS=segmenter round 1|status 9")
+vcar_cli_test(NAME segment_segmenter_bad_mask
+  ARGS "${_seg_common}|--segmenter-cmd|${_picker} --bad-size|--out|${_cli_work}/bad6" RC 3
+  FIXTURES_REQUIRED vcar_cli_dataset
+  CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DSTDERR_HAS=frame 0")
+vcar_cli_test(NAME segment_segmenter_timeout
+  ARGS "${_seg_common}|--segmenter-cmd|${_picker} --sleep 30|--segmenter-timeout|0.5|--out|${_cli_work}/bad7" RC 3
+  FIXTURES_REQUIRED vcar_cli_dataset
+  CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DSTDERR_HAS=timed out")
+
+# ---- eval and render -----------------------------------------------------------------------
+vcar_cli_test(NAME eval_json
+  ARGS "eval|--dataset|${_cli_ds}|--selection|${_cli_work}/seg_masks/selection.json|--json" RC 0
+  FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_selection"
+  CHECKS "-DSTDOUT_JSON_KEYS=mIoU|mAcc|boundary_iou|boundary_f1|precision_3d|recall_3d|f1_3d"
+         "-DAT_LEAST=-:mIoU:0.5|-:recall_3d:0.5")
+vcar_cli_test(NAME eval_missing_selection
+  ARGS "eval|--dataset|${_cli_ds}|--selection|${_cli_work}/no_selection.json" RC 2
+  FIXTURES_REQUIRED vcar_cli_dataset CHECKS "-DSTDERR_HAS=no_selection.json")
+vcar_cli_test(NAME render
+  ARGS "render|--scene|${_cli_ds}/scene.ply|--cameras|${_cli_ds}/cameras.json|--view|train_000|--selection|${_cli_work}/seg_masks/selection.json|--out|${_cli_work}/render.png|--alpha|${_cli_work}/render_alpha.png" RC 0
+  FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_selection"
+  CHECKS "-DFILES=${_cli_work}/render.png|${_cli_work}/render_alpha.png")
+
+# Ctrl-C while the external segmenter runs: exit 4, the program is stopped.
+add_test(NAME cli/segment_interrupted
+  COMMAND /bin/sh -c "\"$1\" segment --scene \"$2/scene.ply\" --cameras \"$2/cameras.json\" --prompt-view train_000 --points 1,1 --segmenter-cmd \"$3 --sleep 60\" --out \"$4\" & pid=$!; sleep 1; kill -INT $pid; wait $pid; rc=$?; test $rc -eq 4 || { echo \"exit $rc, expected 4\"; exit 1; }"
+          sh $<TARGET_FILE:vcar_cli> ${_cli_ds} ${_picker} ${_cli_work}/interrupted)
+set_tests_properties(cli/segment_interrupted PROPERTIES FIXTURES_REQUIRED vcar_cli_dataset TIMEOUT 60)

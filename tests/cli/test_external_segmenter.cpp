@@ -1,0 +1,194 @@
+// The external segmenter protocol, end to end with examples/segmenters/colour_picker.py.
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "vcar/io/external_segmenter.hpp"
+
+namespace fs = std::filesystem;
+using vcar::io::ExternalSegmenter;
+using vcar::io::split_command_line;
+
+namespace {
+
+const std::string picker = std::string(VCAR_TEST_DATA_DIR) + "/../../examples/segmenters/colour_picker.py";
+
+// Frame k: columns x < 10 + 2k are red, the rest blue (so each frame's mask differs).
+vcar::ImageRGB8 frame_image(std::size_t k, int w, int h) {
+  vcar::ImageRGB8 img(w, h, 3);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const bool red = x < 10 + 2 * static_cast<int>(k);
+      img(x, y, 0) = red ? 200 : 10;
+      img(x, y, 2) = red ? 10 : 200;
+    }
+  return img;
+}
+
+struct Fixture {
+  std::vector<vcar::Camera> cams;
+  vcar::Prompt prompt;
+  fs::path work = fs::temp_directory_path() / ("vcar-test-extseg-" + std::to_string(::getpid()));
+  Fixture() {
+    for (int k = 0; k < 3; ++k) {
+      vcar::Intrinsics K{32, 24, 30.f, 31.f, 16.f, 12.f};
+      cams.push_back(vcar::Camera::look_at({2.f * k, -1.f, -4.f}, {0, 0, 0}, {0, -1, 0}, K,
+                                           "view_" + std::to_string(k)));
+    }
+    prompt.points = {{3.5f, 5.5f}};
+    prompt.point_labels = {1};
+    prompt.text = "the red part";
+  }
+  ~Fixture() { std::error_code ec; fs::remove_all(work, ec); }
+  vcar::FrameSequence frames() const {
+    vcar::FrameSequence f;
+    f.cameras = cams;
+    f.image = [](std::size_t k) { return frame_image(k, 32, 24); };
+    return f;
+  }
+  vcar::io::ExternalSegmenterOptions options() const {
+    vcar::io::ExternalSegmenterOptions o;
+    o.work_dir = work;
+    return o;
+  }
+};
+
+std::string message_of(ExternalSegmenter& s, const vcar::FrameSequence& f, const vcar::Prompt& p) {
+  try {
+    vcar::segment_all(s, f, p);
+  } catch (const vcar::Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST_CASE("split_command_line honours quotes and backslashes like a shell") {
+  using V = std::vector<std::string>;
+  CHECK(split_command_line("a b  c") == V{"a", "b", "c"});
+  CHECK(split_command_line("  python3 'my script.py' --x \"a b\"") == V{"python3", "my script.py", "--x", "a b"});
+  CHECK(split_command_line(R"(a\ b "q\"uote" 'it''s' "\$HOME" '\n')") == V{"a b", "q\"uote", "its", "$HOME", "\\n"});
+  CHECK(split_command_line("x''") == V{"x"});
+  CHECK(split_command_line("'' y") == V{"", "y"});
+  CHECK(split_command_line("").empty());
+  CHECK_THROWS_AS(split_command_line("a 'b"), vcar::Error);
+  CHECK_THROWS_AS(split_command_line("a \"b"), vcar::Error);
+  CHECK_THROWS_WITH(split_command_line("a\\", "--segmenter-cmd"), Catch::Contains("--segmenter-cmd"));
+}
+
+TEST_CASE("ExternalSegmenter runs the program and reads its masks") {
+  Fixture fx;
+  auto o = fx.options();
+  o.keep_requests = true;
+  ExternalSegmenter s("/usr/bin/python3 " + picker + " --skip 2", o);
+  static_assert(vcar::Segmenter<ExternalSegmenter>);
+  const auto masks = vcar::segment_all(s, fx.frames(), fx.prompt);
+  REQUIRE(masks.size() == 3);
+  CHECK(s.rounds() == 1);
+  CHECK(s.failure() == ExternalSegmenter::Failure::none);
+  for (std::size_t k = 0; k < 2; ++k) {
+    REQUIRE(masks[k].has_value());
+    CHECK(masks[k]->width == 32);
+    CHECK(masks[k]->height == 24);
+    std::size_t wrong = 0;
+    for (int y = 0; y < 24; ++y)
+      for (int x = 0; x < 32; ++x)
+        wrong += ((*masks[k])(x, y) != 0) != (x < 10 + 2 * static_cast<int>(k));
+    CHECK(wrong == 0);
+  }
+  CHECK_FALSE(masks[2].has_value());  // --skip 2: missing file = no mask
+
+  // The request: frames, cameras.json in Inria layout (camera-to-world), prompt.json.
+  const fs::path req = s.last_request_dir();
+  CHECK(fs::exists(req / "frames" / "00002.png"));
+  std::ifstream cj(req / "cameras.json");
+  const auto cams = nlohmann::json::parse(cj);
+  REQUIRE(cams.size() == 3);
+  for (std::size_t k = 0; k < 3; ++k) {
+    CHECK(cams[k]["img_name"] == ExternalSegmenter::frame_stem(k));
+    CHECK(cams[k]["view"] == fx.cams[k].name);
+    // position = camera centre; rotation rows r: R_c2w(r, c) = R_w(c, r).
+    const Eigen::Vector3f eye(2.f * k, -1.f, -4.f);
+    for (int d = 0; d < 3; ++d) CHECK(cams[k]["position"][d].get<float>() == Approx(eye[d]).margin(1e-5));
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        CHECK(cams[k]["rotation"][r][c].get<float>() == Approx(fx.cams[k].R_w(c, r)).margin(1e-6));
+    CHECK(cams[k]["fx"].get<float>() == Approx(30.f));
+    CHECK(cams[k]["fy"].get<float>() == Approx(31.f));
+  }
+  std::ifstream pj(req / "prompt.json");
+  const auto p = nlohmann::json::parse(pj);
+  CHECK(p["points"][0][0].get<float>() == Approx(3.5f));
+  CHECK(p["point_labels"][0] == 1);
+  CHECK(p["text"] == "the red part");
+  CHECK(p["box"].is_null());
+
+  // Second round: a fresh directory and the round counter moves on.
+  vcar::segment_all(s, fx.frames(), fx.prompt);
+  CHECK(s.rounds() == 2);
+  CHECK(s.last_request_dir() != req);
+}
+
+TEST_CASE("ExternalSegmenter removes the request directory after a good round") {
+  Fixture fx;
+  ExternalSegmenter s("/usr/bin/python3 " + picker, fx.options());
+  vcar::segment_all(s, fx.frames(), fx.prompt);
+  CHECK_FALSE(fs::exists(s.last_request_dir()));
+}
+
+TEST_CASE("ExternalSegmenter failures name the round and the frame") {
+  Fixture fx;
+  SECTION("non-zero exit") {
+    ExternalSegmenter s("/usr/bin/python3 " + picker + " --fail 7", fx.options());
+    const std::string msg = message_of(s, fx.frames(), fx.prompt);
+    CHECK_THAT(msg, Catch::Contains("segmenter round 1") && Catch::Contains("status 7") &&
+                        Catch::Contains("failing on purpose"));
+    CHECK(s.failure() == ExternalSegmenter::Failure::exit_status);
+    CHECK(fs::exists(s.last_request_dir()));  // kept for debugging
+  }
+  SECTION("timeout") {
+    auto o = fx.options();
+    o.timeout_s = 0.3;
+    ExternalSegmenter s("/usr/bin/python3 " + picker + " --sleep 20", o);
+    const std::string msg = message_of(s, fx.frames(), fx.prompt);
+    CHECK_THAT(msg, Catch::Contains("timed out") && Catch::Contains("segmenter round 1"));
+    CHECK(s.failure() == ExternalSegmenter::Failure::timeout);
+  }
+  SECTION("cancel") {
+    auto o = fx.options();
+    o.cancelled = [] { return true; };
+    ExternalSegmenter s("/usr/bin/python3 " + picker + " --sleep 20", o);
+    CHECK_THAT(message_of(s, fx.frames(), fx.prompt), Catch::Contains("interrupted"));
+    CHECK(s.failure() == ExternalSegmenter::Failure::cancelled);
+  }
+  SECTION("wrong-size mask") {
+    ExternalSegmenter s("/usr/bin/python3 " + picker + " --bad-size", fx.options());
+    const std::string msg = message_of(s, fx.frames(), fx.prompt);
+    CHECK_THAT(msg, Catch::Contains("frame 0") && Catch::Contains("view_0") && Catch::Contains("33x24"));
+    CHECK(s.failure() == ExternalSegmenter::Failure::bad_mask);
+  }
+  SECTION("undecodable mask") {
+    ExternalSegmenter s("/usr/bin/python3 " + picker + " --garbage", fx.options());
+    const std::string msg = message_of(s, fx.frames(), fx.prompt);
+    CHECK_THAT(msg, Catch::Contains("frame 0") && Catch::Contains("00000.png") && Catch::Contains("decode"));
+    CHECK(s.failure() == ExternalSegmenter::Failure::bad_mask);
+  }
+  SECTION("program not found") {
+    ExternalSegmenter s("/nonexistent/segmenter --x", fx.options());
+    CHECK_THAT(message_of(s, fx.frames(), fx.prompt), Catch::Contains("/nonexistent/segmenter"));
+    CHECK(s.failure() == ExternalSegmenter::Failure::start);
+  }
+  SECTION("empty command and bad timeout") {
+    CHECK_THROWS_AS(ExternalSegmenter("   ", fx.options()), vcar::Error);
+    auto o = fx.options();
+    o.timeout_s = 0;
+    CHECK_THROWS_WITH(ExternalSegmenter("x", o), Catch::Contains("timeout"));
+  }
+}
