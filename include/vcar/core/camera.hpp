@@ -29,6 +29,11 @@ struct Camera {
   }
 
   Eigen::Vector3f to_camera(const Eigen::Vector3f& p) const { return R_w * p + t_w; }
+  // Sets the pose from a camera-to-world rotation (OpenCV axes) and the camera centre.
+  void set_camera_to_world(const Eigen::Matrix3f& R_c2w, const Eigen::Vector3f& centre) {
+    R_w = R_c2w.transpose();
+    t_w = -(R_w * centre);
+  }
   // Camera centre in world: -R_w^T t_w.
   Eigen::Vector3f position() const { return -(R_w.transpose() * t_w); }
   // World directions of the camera's forward (+z), right (+x) and up (-y) axes.

@@ -26,7 +26,7 @@ inline std::vector<Camera> cameras_from_inria_json(const nlohmann::json& j, cons
   for (std::size_t k = 0; k < j.size(); ++k) {
     const auto& e = j[k];
     const std::string entry = "entry " + std::to_string(k);
-    try {
+    read_entry(entry, where, [&] {
       for (const char* key : {"img_name", "width", "height", "position", "rotation", "fx", "fy"})
         if (!e.contains(key)) throw Error(entry + " has no '" + key + "'", where);
       Camera c;
@@ -47,16 +47,10 @@ inline std::vector<Camera> cameras_from_inria_json(const nlohmann::json& j, cons
         centre[r] = pos[r].get<float>();
         for (int c2 = 0; c2 < 3; ++c2) R_c2w(r, c2) = rot[r][c2].get<float>();
       }
-      c.R_w = R_c2w.transpose();
-      c.t_w = -(c.R_w * centre);
+      c.set_camera_to_world(R_c2w, centre);
       c.validate();
       out.push_back(std::move(c));
-    } catch (const nlohmann::json::exception& ex) {
-      throw Error(entry + ": " + ex.what(), where);
-    } catch (const Error& ex) {
-      if (ex.where() == where) throw;
-      throw Error(entry + ": " + ex.what(), where);
-    }
+    });
   }
   return out;
 }

@@ -28,6 +28,20 @@ inline void write_json_file(const std::filesystem::path& path, const nlohmann::j
   atomic_write(path, [&](std::ostream& out) { out << text; });
 }
 
+// Reads one entry of a camera file: JSON type errors and vcar::Errors from `read` come out as
+// vcar::Error naming the entry (e.g. "entry 3") and the file `where`.
+template <class F>
+void read_entry(const std::string& entry, const std::string& where, F&& read) {
+  try {
+    read();
+  } catch (const nlohmann::json::exception& ex) {
+    throw Error(entry + ": " + ex.what(), where);
+  } catch (const Error& ex) {
+    if (ex.where() == where) throw;
+    throw Error(entry + ": " + ex.what(), where);
+  }
+}
+
 // A float as the double that prints shortest (0.1f -> 0.1, not 0.10000000149011612).
 inline double json_float(float v) {
   char buf[32];

@@ -36,7 +36,7 @@ inline std::vector<Camera> cameras_from_transforms(const nlohmann::json& j, cons
   for (std::size_t k = 0; k < frames.size(); ++k) {
     const auto& f = frames[k];
     std::string entry = "frame " + std::to_string(k);
-    try {
+    read_entry(entry, where, [&] {
       auto get = [&](const char* key) -> std::optional<double> {
         if (f.contains(key)) return f.at(key).get<double>();
         if (j.contains(key)) return j.at(key).get<double>();
@@ -89,16 +89,10 @@ inline std::vector<Camera> cameras_from_transforms(const nlohmann::json& j, cons
       Eigen::Matrix3f R_c2w = R_gl;
       R_c2w.col(1) *= -1.f;  // OpenGL y up -> OpenCV y down
       R_c2w.col(2) *= -1.f;  // OpenGL z backward -> OpenCV z forward
-      c.R_w = R_c2w.transpose();
-      c.t_w = -(c.R_w * centre);
+      c.set_camera_to_world(R_c2w, centre);
       c.validate();
       out.push_back(std::move(c));
-    } catch (const nlohmann::json::exception& ex) {
-      throw Error(entry + ": " + ex.what(), where);
-    } catch (const Error& ex) {
-      if (ex.where() == where) throw;
-      throw Error(entry + ": " + ex.what(), where);
-    }
+    });
   }
   return out;
 }
