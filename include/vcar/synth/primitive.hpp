@@ -231,7 +231,7 @@ struct SurfaceSample {
 inline SurfaceSample sample_surface(const Primitive& q, Rng& rng) {
   constexpr float pi = std::numbers::pi_v<float>;
   const Eigen::Vector3f& a = q.params;
-  Eigen::Vector3f p, n;
+  Eigen::Vector3f p = Eigen::Vector3f::Zero(), n = Eigen::Vector3f::UnitZ();  // every case sets both
   switch (q.type) {
     case PrimitiveType::sphere: {
       const float z = rng.uniform(-1.f, 1.f), phi = 2.f * pi * rng.uniform();
