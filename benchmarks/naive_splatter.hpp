@@ -1,12 +1,18 @@
 #pragma once
-// The straightforward CPU splatter the tiled renderer is measured against (OpenSplat CPU style):
-// one thread, no tiles, no SIMD; Gaussians sorted by depth once, each one splatted over the
-// pixels of its bounding box into a per-pixel transmittance buffer. Same rules as CONVENTIONS 3.
+// The naive CPU splatter the tiled renderer is measured against, structured like OpenSplat's CPU
+// forward pass (rasterize_forward_tensor_cpu): one thread, no tiles, no SIMD. Project every
+// Gaussian and take its SH colour first, sort by depth, then for each Gaussian front to back
+// loop over its 3-sigma box (3 sqrt(Sigma2D_xx), 3 sqrt(Sigma2D_yy), +2 px, clipped), skipping
+// pixels already done. Compositing rules are CONVENTIONS 3 (pixel centres at +0.5), so its
+// output equals the tiled renderer's except where the 3-sigma box is smaller than the
+// opacity-aware extent (opaque splats lose their 3.0-3.33 sigma fringe, alpha < 0.012).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <numeric>
 #include <vector>
+
+#include <Eigen/Core>
 
 #include "vcar/concepts/renderer.hpp"
 #include "vcar/core/projection.hpp"
@@ -19,44 +25,62 @@ inline RenderOutput naive_render(const RenderRequest& q, const ProjectionParams&
   const Camera& cam = *q.camera;
   const int W = cam.width, H = cam.height;
   const std::size_t n = sc.size();
-  struct Splat { float mx, my, a, b, c, op, z, r, g, bl; int rx, ry; };
-  std::vector<Splat> splats;
-  splats.reserve(n);
+  // Per-Gaussian arrays, as OpenSplat keeps its tensors (culled ones stay, marked invalid).
+  std::vector<float> mx(n), my(n), A(n), B(n), C(n), op(n), depth(n), sqx(n), sqy(n), rgb(3 * n);
+  std::vector<std::uint8_t> valid(n, 0);
   const Eigen::Vector3f eye = cam.position();
   for (std::size_t i = 0; i < n; ++i) {
-    const float op = sc.opacity(i);
-    const ProjectedGaussian p = project_gaussian(cam, sc.mu(i), sc.R(i), sc.scale(i), op, pp);
+    op[i] = sc.opacity(i);
+    const ProjectedGaussian p = project_gaussian(cam, sc.mu(i), sc.R(i), sc.scale(i), op[i], pp);
+    depth[i] = p.depth;
     if (!p.valid || !p.on_screen) continue;
-    const Eigen::Vector3f c = gaussian_rgb(sc, i, eye);
-    splats.push_back({p.mean.x(), p.mean.y(), p.conic[0], p.conic[1], p.conic[2], op, p.depth,
-                      c[0], c[1], c[2], p.radius_x, p.radius_y});
+    valid[i] = 1;
+    mx[i] = p.mean.x();
+    my[i] = p.mean.y();
+    A[i] = p.conic[0];
+    B[i] = p.conic[1];
+    C[i] = p.conic[2];
+    sqx[i] = 3.f * std::sqrt(p.Sigma2D(0, 0));
+    sqy[i] = 3.f * std::sqrt(p.Sigma2D(1, 1));
   }
-  std::stable_sort(splats.begin(), splats.end(), [](const Splat& a, const Splat& b) { return a.z < b.z; });
+  for (std::size_t i = 0; i < n; ++i) {  // SH colour of every Gaussian first (OpenSplat)
+    const Eigen::Vector3f c = gaussian_rgb(sc, i, eye);
+    for (int k = 0; k < 3; ++k) rgb[3 * i + k] = c[k];
+  }
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  // Stable, so equal depths keep the lower index in front (as the tiled renderer does).
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return depth[a] < depth[b]; });
+
   std::vector<float> T(static_cast<std::size_t>(W) * H, 1.f);
   std::vector<std::uint8_t> done(T.size(), 0);
   RenderOutput out;
   out.rgb = ImageF(W, H, 3);
   out.alpha = ImageF(W, H, 1);
-  for (const Splat& s : splats) {
-    const int x0 = std::max(0, static_cast<int>(std::floor(s.mx - s.rx)));
-    const int x1 = std::min(W - 1, static_cast<int>(std::ceil(s.mx + s.rx)));
-    const int y0 = std::max(0, static_cast<int>(std::floor(s.my - s.ry)));
-    const int y1 = std::min(H - 1, static_cast<int>(std::ceil(s.my + s.ry)));
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) {
+  for (const std::size_t g : order) {
+    if (!valid[g]) continue;
+    const int y0 = std::max(0, static_cast<int>(std::floor(my[g] - sqy[g])) - 2);
+    const int y1 = std::min(H, static_cast<int>(std::ceil(my[g] + sqy[g])) + 2);
+    const int x0 = std::max(0, static_cast<int>(std::floor(mx[g] - sqx[g])) - 2);
+    const int x1 = std::min(W, static_cast<int>(std::ceil(mx[g] + sqx[g])) + 2);
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x) {
         const std::size_t o = static_cast<std::size_t>(y) * W + x;
         if (done[o]) continue;
-        const float dx = s.mx - (x + 0.5f), dy = s.my - (y + 0.5f);
-        const float sigma = 0.5f * (s.a * dx * dx + s.c * dy * dy) + s.b * dx * dy;
+        const float dx = mx[g] - (static_cast<float>(x) + 0.5f), dy = my[g] - (static_cast<float>(y) + 0.5f);
+        const float sigma = 0.5f * (A[g] * dx * dx + C[g] * dy * dy) + B[g] * dx * dy;
         if (sigma < 0.f) continue;
-        const float alpha = std::min(0.999f, s.op * std::exp(-sigma));
+        const float alpha = std::min(0.999f, op[g] * std::exp(-sigma));
         if (alpha < 1.f / 255.f) continue;
         const float nT = T[o] * (1.f - alpha);
-        if (nT <= 1e-4f) { done[o] = 1; continue; }
+        if (nT <= 1e-4f) {  // this pixel is done; the Gaussian is not composited (gsplat)
+          done[o] = 1;
+          continue;
+        }
         const float w = alpha * T[o];
-        out.rgb.data[o * 3 + 0] += w * s.r;
-        out.rgb.data[o * 3 + 1] += w * s.g;
-        out.rgb.data[o * 3 + 2] += w * s.bl;
+        out.rgb.data[o * 3 + 0] += w * rgb[3 * g + 0];
+        out.rgb.data[o * 3 + 1] += w * rgb[3 * g + 1];
+        out.rgb.data[o * 3 + 2] += w * rgb[3 * g + 2];
         T[o] = nT;
       }
   }

@@ -99,7 +99,7 @@ TEST_CASE("gap-directed cameras sit in a cone around the gap direction") {
   const auto cams = vcar::gap_directed_cameras(sphere, {0, 0, 1}, g, {32, 32, 30, 30, 16, 16}, 6, 20.f);
   REQUIRE(cams.size() == 6);
   CHECK((cams[0].position() - (sphere.c + 3.f * g)).norm() == Approx(0).margin(1e-5));
-  CHECK(cams[5].name == "gap_005");
+  CHECK(cams[5].name == "sss_gap_005");
   for (std::size_t k = 0; k < cams.size(); ++k) {
     const Eigen::Vector3f d = cams[k].position() - sphere.c;
     CHECK(d.norm() == Approx(3.0).epsilon(1e-5));

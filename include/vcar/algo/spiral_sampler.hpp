@@ -120,7 +120,7 @@ inline std::vector<Camera> spiral_cameras(const ObjectSphere& sphere, const Eige
 // Beyond the paper: n cameras on the sphere in a cone of half-angle cone_deg around the
 // largest-gap direction g (from c outward), on one spiral turn from the axis to the cone's rim
 // (camera k at angle cone k / (n - 1) from g, azimuth 2 pi k / n), so consecutive frames move
-// smoothly. n = 1 gives the single camera on the axis. Named gap_000, ...
+// smoothly. n = 1 gives the single camera on the axis. Named sss_gap_000, ...: sampled views, like the spiral's sss_000, ...
 inline std::vector<Camera> gap_directed_cameras(const ObjectSphere& sphere, const Eigen::Vector3f& up,
                                                 const Eigen::Vector3f& gap_direction, const Intrinsics& intrinsics,
                                                 int n, float cone_deg) {
@@ -135,7 +135,7 @@ inline std::vector<Camera> gap_directed_cameras(const ObjectSphere& sphere, cons
     const double psi = 2.0 * std::numbers::pi * k / n;
     const Eigen::Vector3d d = std::cos(alpha) * g + std::sin(alpha) * (std::cos(psi) * a + std::sin(psi) * b);
     const Eigen::Vector3d p = sphere.c.cast<double>() + static_cast<double>(sphere.r) * d;
-    cams.push_back(Camera::look_at(p.cast<float>(), sphere.c, up, intrinsics, sampled_view_name("gap_", k)));
+    cams.push_back(Camera::look_at(p.cast<float>(), sphere.c, up, intrinsics, sampled_view_name("sss_gap_", k)));
   }
   return cams;
 }

@@ -1,0 +1,506 @@
+// The evidence driver: methods x VCAR variants x rigs x scene sizes x oracle failure levels x
+// seeds on the synthetic world, one tidy CSV row per run plus a JSON summary.
+//
+//   bench_evidence [--quick | --full] [--out DIR] [--seeds N] [--max-size N] [--only SWEEP]
+//                  [--set key=value]... (VcarParams, every VCAR run) [--methods a,b] (keep only these)
+//
+// Evaluation (CONVENTIONS 6): the selected Gaussians alone (refined scales for VCAR, decomposed
+// geometry for SAGD) are rendered from the rig's held-out views; alpha > 0.5 (and > 0.1) is
+// compared with the target's full silhouette there. Every method sees the same oracle masks:
+// the peers get the training masks the oracle gives in VCAR's frame order (reference first),
+// which are the masks of VCAR's coarse round (the oracle is deterministic in (seed, frame, camera)).
+// Times: t_method excludes the segmenter (the oracle stands in for SAM); time_s includes it.
+// Peak memory: process peak during the run (see evidence/peak_memory.hpp).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "vcar/algo/params.hpp"
+#include "vcar/algo/pipeline.hpp"
+#include "vcar/backends/cpu/tiled_renderer.hpp"
+#include "vcar/baselines/flashsplat.hpp"
+#include "vcar/baselines/gaussian_cut.hpp"
+#include "vcar/baselines/lbg.hpp"
+#include "vcar/baselines/ludvig.hpp"
+#include "vcar/baselines/naive_voting.hpp"
+#include "vcar/baselines/sagd.hpp"
+#include "vcar/core/parallel.hpp"
+#include "vcar/eval/aggregate.hpp"
+#include "vcar/eval/selection_metrics.hpp"
+#include "vcar/synth/ground_truth.hpp"
+#include "vcar/synth/oracle_segmenter.hpp"
+#include "vcar/synth/rigs.hpp"
+#include "vcar/synth/world.hpp"
+
+#include "evidence/peak_memory.hpp"
+#include "evidence/run_record.hpp"
+
+namespace {
+
+using namespace vcar;
+using evidence::RunRecord;
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// ---------------------------------------------------------------------------------------------
+// Worlds with the object fixed: the world is generated at `base` Gaussians and grown to `total`
+// with background discs on the floor around the table (radius 1.3-3, id -1), so the target,
+// its neighbour and the table keep the same Gaussians while the scene grows. The wedge behind
+// the target as seen from the forward rig (front = -y) is left empty: centre voting would
+// otherwise pick up floor behind the target and the coarse set would grow with the scene.
+void pad_world(synth::World& w, std::size_t total, std::uint64_t seed) {
+  GaussianScene& g = w.scene;
+  const std::size_t n0 = g.size();
+  if (total <= n0) return;
+  const std::size_t n = total;
+  for (auto& c : g.mean) c.resize(n);
+  for (auto& c : g.log_scale) c.resize(n);
+  for (auto& c : g.rotation) c.resize(n);
+  g.opacity_logit.resize(n);
+  g.sh.resize(n * static_cast<std::size_t>(g.sh_coeffs()) * 3, 0.f);
+  g.extra.resize(n * g.extra_names.size(), 0.f);
+  w.object_id.resize(n, -1);
+  const float r0 = 1.3f, r1 = 3.f;
+  const float area = 3.14159265f * (r1 * r1 - r0 * r0);
+  const float spacing = std::sqrt(area / static_cast<float>(n - n0));
+  for (std::size_t i = n0; i < n; ++i) {
+    synth::Rng rng(seed, 0x9AD, i);
+    Eigen::Vector3f p;
+    do {  // rejection: outside the wedge |x| < 0.5 (y + 1.6) + 0.8 behind the target
+      const float r = std::sqrt(rng.uniform(r0 * r0, r1 * r1)), a = 6.2831853f * rng.uniform();
+      p = Eigen::Vector3f(r * std::cos(a), r * std::sin(a), 0.f);
+    } while (p.y() > -1.6f && std::abs(p.x()) < 0.5f * (p.y() + 1.6f) + 0.8f);
+    const Eigen::Vector3f nz(0.f, 0.f, 1.f);
+    const float grey = rng.uniform(0.3f, 0.6f);
+    synth::detail::put_gaussian(g, i, p, nz, synth::detail::random_tangent(nz, rng),
+                                Eigen::Vector3f(0.8f * spacing, 0.8f * spacing, 0.05f * spacing), 0.9f,
+                                Eigen::Vector3f(grey, grey, 0.9f * grey));
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The oracle as VCAR's segmenter. The pipeline renders sampled views from G_coarse only, so the
+// segmenter sees the target alone there: the oracle answers those (named sss_...) with the
+// silhouette. Each frame is rendered (and discarded) as SAM would need it, so t_render is the
+// pipeline's real render cost.
+class PipelineOracle {
+public:
+  explicit PipelineOracle(const synth::OracleSegmenter& oracle) : oracle_(&oracle) {}
+  void segment(const FrameSequence& frames, const Prompt&, const MaskSink& sink) {
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+      (void)frames.image(k);  // a real segmenter needs the render: its cost is part of the method
+      const std::optional<Mask> m = oracle_->mask(frames.cameras[k], k);
+      sink(k, m ? &*m : nullptr);
+    }
+  }
+
+private:
+  const synth::OracleSegmenter* oracle_;
+};
+static_assert(Segmenter<PipelineOracle>);
+
+// ---------------------------------------------------------------------------------------------
+struct Experiment {
+  int seed = 1;
+  std::size_t object_size = 30000;  // Gaussians of the generated world (object fixed)
+  std::size_t total = 30000;        // after padding
+  std::string rig = "forward";
+  std::string failure = "none";
+  double level = 0;
+  int width = 160, height = 120, n_train = 0;
+  std::vector<std::string> methods;  // "vcar:<variant>" or a peer's name
+};
+
+struct Options {
+  bool quick = false;
+  std::filesystem::path out = "evidence-out";
+  int seeds = 0;
+  std::size_t max_size = 0;
+  std::string only;
+  std::vector<std::string> set;      // --set key=value, applied to every VCAR run
+  std::vector<std::string> methods;  // --methods a,b: keep only these (targeted experiments)
+};
+
+const std::vector<std::string> kPeers = {"naive", "sagd", "flashsplat", "gaussiancut", "ludvig", "lbg"};
+const std::vector<std::string> kVariants = {"coarse", "sss", "abr", "full", "occlusion", "gapdir"};
+
+std::vector<std::string> all_methods(bool variants = true) {
+  std::vector<std::string> m = kPeers;
+  if (variants) for (const auto& v : kVariants) m.push_back("vcar:" + v);
+  else m.push_back("vcar:full");
+  return m;
+}
+
+synth::OracleParams oracle_for(const Experiment& e) {
+  synth::OracleParams o;
+  o.seed = static_cast<std::uint64_t>(e.seed) * 7919u + 13u;
+  const double L = e.level;
+  if (e.failure == "dilate") o.dilate_px = static_cast<int>(L);
+  else if (e.failure == "erode") o.dilate_px = -static_cast<int>(L);
+  else if (e.failure == "blobs") o.n_blobs = static_cast<int>(L);
+  else if (e.failure == "drop") o.p_drop = L;
+  else if (e.failure == "swap") o.p_swap = L;
+  else if (e.failure == "jitter") o.jitter_px = static_cast<int>(L);
+  return o;
+}
+
+bool is_360(const std::string& rig) { return rig != "forward"; }
+
+// VCAR parameters per variant; preset nvos on forward-facing rigs, lerf on the others (Sec. 4.2).
+VcarParams vcar_params(const std::string& variant, const Experiment& e, const std::vector<std::string>& set) {
+  VcarParams p = is_360(e.rig) ? VcarParams::lerf() : VcarParams::nvos();
+  p.enable_sss = variant != "coarse" && variant != "abr";
+  p.enable_abr = variant != "coarse" && variant != "sss";
+  p.occlusion_aware = variant == "occlusion";
+  p.gap_directed = variant == "gapdir";
+  if (e.failure == "tau") { p.tau_coarse = static_cast<float>(e.level); p.tau_fine = static_cast<float>(e.level); }
+  for (const std::string& kv : set) p.set(kv);
+  return p;
+}
+
+// ---------------------------------------------------------------------------------------------
+class Driver {
+public:
+  explicit Driver(const Options& o) : opt_(o) {}
+
+  void open() {
+    std::filesystem::create_directories(opt_.out);
+    csv_.open(opt_.out / "evidence.csv");
+    if (!csv_) throw Error("cannot write", (opt_.out / "evidence.csv").string());
+    csv_ << evidence::csv_header() << "\n";
+  }
+
+  void run(const Experiment& e) {
+    const synth::World& w = world(e.seed, e.object_size, e.total);
+    synth::RigParams rp;
+    rp.intrinsics = synth::make_intrinsics(e.width, e.height);
+    rp.n_train = e.n_train;
+    rp.seed = static_cast<std::uint64_t>(e.seed);
+    const synth::Rig rig = synth::make_rig(e.rig, w, rp);
+    std::vector<Mask> gt;
+    for (const Camera& c : rig.eval) gt.push_back(synth::silhouette_mask(w, c, w.target_id, renderer_));
+    const std::vector<Index> truth = w.gaussians_of(w.target_id);
+    synth::OracleSegmenter oracle(w, oracle_for(e), renderer_);
+    PipelineOracle segmenter(oracle);
+
+    // The training masks in VCAR's frame order (reference first), stored by training index.
+    const auto order = vcar::detail::training_order(rig.train.size(), rig.reference);
+    std::vector<std::optional<Mask>> masks(rig.train.size());
+    const auto ts = Clock::now();
+    for (std::size_t k = 0; k < order.size(); ++k) masks[order[k]] = oracle.mask(rig.train[order[k]], k);
+    const double t_masks = since(ts);
+    const baselines::MaskProvider provider = baselines::masks_from(masks);
+    Prompt prompt;
+    prompt.reference_view = rig.reference;
+
+    for (const std::string& m : e.methods) {
+      RunRecord r;
+      r.method = m.rfind("vcar:", 0) == 0 ? "vcar" : m;
+      r.variant = r.method == "vcar" ? m.substr(5) : "full";
+      r.rig = e.rig; r.seed = e.seed; r.gaussians = w.scene.size(); r.object_gaussians = truth.size();
+      r.failure = e.failure; r.level = e.level; r.width = e.width; r.height = e.height;
+      r.n_train = static_cast<int>(rig.train.size()); r.n_eval = static_cast<int>(rig.eval.size());
+      const double rss0 = evidence::reset_peak();
+      std::vector<Index> sel;
+      std::optional<LogScales> scales;
+      std::optional<GaussianScene> own_scene;  // SAGD's decomposed geometry
+      const auto t0 = Clock::now();
+      if (r.method == "vcar") {
+        const VcarParams p = vcar_params(r.variant, e, opt_.set);
+        r.preset = is_360(e.rig) ? "lerf" : "nvos";
+        SegmentationResult res = segment(w.scene, rig.train, prompt, renderer_, segmenter, p);
+        r.time_s = since(t0);
+        const Diagnostics& d = res.diagnostics;
+        double seg = 0, ren = 0, vote = 0, vca = 0, abr = 0, fine = 0;
+        for (const auto& [name, s] : d.timings_s) {
+          if (name.find("_segment") != std::string::npos) seg += s;
+          else if (name.find("_render") != std::string::npos) ren += s;
+          else if (name.find("_voting") != std::string::npos) vote += s;
+          else if (name == "vca") vca += s;
+          else if (name == "abr") abr += s;
+          if (name == "fine_render" || name == "fine_voting") fine += s;
+        }
+        r.t_render = ren; r.t_segment = seg; r.t_vote = vote; r.t_vca = vca;
+        r.t_sss = d.sss_triggered ? fine : 0.0;
+        r.t_abr = abr;
+        r.t_method = r.time_s - seg;
+        r.frames_segmented = static_cast<int>(rig.train.size() + (d.sss_triggered ? rig.train.size() + d.sampled_cameras.size() : 0));
+        r.n_coarse = static_cast<long>(d.n_coarse); r.n_fine = static_cast<long>(d.n_fine);
+        r.abr_flagged = static_cast<long>(d.abr_flagged); r.abr_compressed = static_cast<long>(d.abr_compressed);
+        r.valid_cameras = static_cast<long>(d.valid_cameras); r.max_gap_deg = d.max_gap_deg;
+        r.sss_triggered = d.sss_triggered ? 1 : 0;
+        sel = std::move(res.indices);
+        if (!sel.empty()) scales = std::move(res.log_scale);
+      } else {
+        r.preset = is_360(e.rig) ? "360" : "forward";
+        baselines::Result res;
+        if (r.method == "naive") {
+          baselines::NaiveVotingParams p;
+          if (e.failure == "tau") p.tau = static_cast<float>(e.level);
+          res = baselines::naive_voting(w.scene, rig.train, provider, p);
+        } else if (r.method == "sagd") {
+          baselines::SagdParams p;
+          if (e.failure == "tau") p.share_min = static_cast<float>(e.level);
+          baselines::SagdResult s = baselines::sagd(w.scene, rig.train, provider, p);
+          own_scene = s.scene_of(w.scene);
+          res = std::move(s);
+        } else if (r.method == "flashsplat") {
+          res = baselines::flashsplat(renderer_, w.scene, rig.train, provider);
+        } else if (r.method == "gaussiancut") {
+          baselines::GaussianCutParams p;
+          p.tau_w = is_360(e.rig) ? 0.3f : 0.9f;  // CONVENTIONS 8
+          if (e.failure == "tau") p.tau_w = static_cast<float>(e.level);
+          res = baselines::gaussian_cut(renderer_, w.scene, rig.train, provider, p);
+        } else if (r.method == "ludvig") {
+          baselines::LudvigParams p;
+          if (e.failure == "tau") p.threshold = static_cast<float>(e.level);
+          res = baselines::ludvig(renderer_, w.scene, rig.train, provider, p);
+        } else if (r.method == "lbg") {
+          res = baselines::lbg(w.scene, rig.train, provider);
+        } else {
+          throw Error("unknown method '" + m + "'", "--methods");
+        }
+        r.t_method = since(t0);
+        r.t_segment = t_masks;
+        r.time_s = r.t_method + t_masks;
+        r.frames_segmented = static_cast<int>(rig.train.size());
+        sel = std::move(res.selected);
+      }
+      r.peak_mib = evidence::peak_mib();
+      r.peak_delta_mib = std::max(0.0, r.peak_mib - rss0);
+      evaluate(r, w, rig, gt, truth, sel, scales ? &*scales : nullptr, own_scene ? &*own_scene : nullptr);
+      csv_ << evidence::csv_row(r) << "\n";
+      csv_.flush();
+      rows_.push_back(r);
+      std::fprintf(stderr, "%-11s %-9s %-10s n=%-7zu %-6s %-5g mIoU %.3f bIoU %.3f F1_3d %.3f  %.3fs\n",
+                   r.method.c_str(), r.variant.c_str(), r.rig.c_str(), r.gaussians, r.failure.c_str(), r.level,
+                   r.miou, r.boundary_iou, r.f1_3d, r.t_method);
+    }
+  }
+
+  void write_summary(double wall_s) {
+    nlohmann::json j;
+    j["mode"] = opt_.quick ? "quick" : "full";
+    j["threads"] = max_threads();
+    j["wall_s"] = wall_s;
+    j["runs"] = rows_.size();
+    j["peak_memory"] = "process VmHWM during the run after clear_refs reset (MiB); delta = peak - RSS before";
+    j["time_columns"] = "t_method excludes the segmenter (oracle); time_s includes it; stage columns for VCAR only";
+    // Means over seeds of the failure-free runs (the headline grid), per method/variant/rig.
+    std::map<std::string, std::vector<const RunRecord*>> groups;
+    for (const RunRecord& r : rows_)
+      if (r.failure == "none")
+        groups[r.method + "/" + r.variant + "/" + r.rig].push_back(&r);
+    nlohmann::json g = nlohmann::json::object();
+    for (const auto& [key, v] : groups) {
+      auto mean = [&](auto f) { double s = 0; for (auto* r : v) s += f(*r); return s / static_cast<double>(v.size()); };
+      g[key] = {{"runs", v.size()},
+                {"miou", mean([](const RunRecord& r) { return r.miou; })},
+                {"macc", mean([](const RunRecord& r) { return r.macc; })},
+                {"miou_01", mean([](const RunRecord& r) { return r.miou_01; })},
+                {"boundary_iou", mean([](const RunRecord& r) { return r.boundary_iou; })},
+                {"boundary_f1", mean([](const RunRecord& r) { return r.boundary_f1; })},
+                {"f1_3d", mean([](const RunRecord& r) { return r.f1_3d; })},
+                {"t_method_s", mean([](const RunRecord& r) { return r.t_method; })}};
+    }
+    j["failure_free"] = g;
+    std::ofstream(opt_.out / "evidence.json") << j.dump(2) << "\n";
+  }
+
+private:
+  const synth::World& world(int seed, std::size_t object_size, std::size_t total) {
+    const std::string key = std::to_string(seed) + "/" + std::to_string(object_size) + "/" + std::to_string(total);
+    if (cache_key_ != key) {
+      synth::WorldParams wp;
+      wp.seed = static_cast<std::uint64_t>(seed);
+      wp.n_gaussians = object_size;
+      cache_ = synth::generate_world(wp);
+      pad_world(cache_, total, static_cast<std::uint64_t>(seed));
+      cache_key_ = key;
+    }
+    return cache_;
+  }
+
+  void evaluate(RunRecord& r, const synth::World& w, const synth::Rig& rig, const std::vector<Mask>& gt,
+                const std::vector<Index>& truth, const std::vector<Index>& sel, const LogScales* scales,
+                const GaussianScene* own) {
+    std::vector<eval::ViewMetrics> m05, m01;
+    for (std::size_t v = 0; v < rig.eval.size(); ++v) {
+      const Camera& cam = rig.eval[v];
+      ImageF alpha(cam.width, cam.height, 1);
+      if (!sel.empty()) {
+        RenderRequest q;
+        q.camera = &cam;
+        if (own) {
+          q.scene = own;
+        } else {
+          q.scene = &w.scene;
+          q.subset = &sel;
+          q.log_scale = scales;
+        }
+        alpha = renderer_.render(q).alpha;
+      }
+      m05.push_back(eval::evaluate_alpha(alpha, gt[v], eval::alpha_default, 0, cam.name));
+      m01.push_back(eval::evaluate_alpha(alpha, gt[v], eval::alpha_released, 0, cam.name));
+    }
+    const eval::ViewMetrics a = eval::mean(std::span<const eval::ViewMetrics>(m05));
+    const eval::ViewMetrics b = eval::mean(std::span<const eval::ViewMetrics>(m01));
+    r.miou = a.iou; r.macc = a.accuracy; r.boundary_iou = a.boundary_iou; r.boundary_f1 = a.boundary_f1;
+    r.trimap_iou = a.trimap_iou; r.miou_01 = b.iou; r.macc_01 = b.accuracy;
+    const eval::SelectionScores s = eval::selection_scores(sel, truth, w.scene.size());
+    r.f1_3d = s.f1; r.precision_3d = s.precision; r.recall_3d = s.recall;
+    r.selected = sel.size();
+  }
+
+  Options opt_;
+  cpu::TiledRenderer renderer_;
+  synth::World cache_;
+  std::string cache_key_;
+  std::ofstream csv_;
+  std::vector<RunRecord> rows_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// The plan: the headline grid (every method and variant x every rig, no failure), then sweeps.
+std::vector<Experiment> plan(const Options& o) {
+  std::vector<Experiment> out;
+  const bool q = o.quick;
+  const int seeds = o.seeds > 0 ? o.seeds : (q ? 1 : 3);
+  const std::size_t base = q ? 30000 : 50000;
+  // 160 x 120 in both modes: the 2 shared cores of this machine fit the full sweep in ~25 min.
+  const int W = 160, H = 120;
+  auto make = [&](int seed, const std::string& rig, const std::string& failure, double level,
+                  std::vector<std::string> methods) {
+    Experiment e;
+    e.seed = seed; e.object_size = base; e.total = base; e.rig = rig; e.failure = failure; e.level = level;
+    e.width = W; e.height = H; e.methods = std::move(methods);
+    return e;
+  };
+  const std::vector<std::string> rigs = {"forward", "orbit", "sparse", "hemisphere"};
+  auto want = [&](const char* sweep) { return o.only.empty() || o.only == sweep; };
+  if (want("grid"))
+    for (int s = 1; s <= seeds; ++s)
+      for (const auto& rig : rigs) out.push_back(make(s, rig, "none", 0, all_methods()));
+  // Stability sweeps on a forward-facing and a 360-degree rig; VCAR coarse + full and the peers.
+  std::vector<std::string> sweep_methods = kPeers;
+  sweep_methods.push_back("vcar:coarse");
+  sweep_methods.push_back("vcar:full");
+  const std::vector<std::string> sweep_rigs = {"forward", "orbit"};
+  const int sweep_seeds = q ? 1 : std::max(1, seeds - 1);  // 2 by default in full mode
+  struct Sweep { const char* failure; std::vector<double> levels; };
+  std::vector<Sweep> sweeps = q ? std::vector<Sweep>{{"dilate", {4}}, {"blobs", {4}}, {"drop", {0.3}}}
+                                : std::vector<Sweep>{{"dilate", {2, 4, 8}},
+                                                     {"erode", {2, 4, 8}},
+                                                     {"blobs", {2, 4, 8}},
+                                                     {"drop", {0.2, 0.4, 0.6}},
+                                                     {"swap", {0.1, 0.3}},
+                                                     {"jitter", {2, 4}},
+                                                     {"tau", {0.3, 0.5, 0.7, 0.9}}};
+  for (const auto& sw : sweeps) {
+    if (!want(sw.failure) && !want("sweeps")) continue;
+    const bool secondary = std::string(sw.failure) == "swap" || std::string(sw.failure) == "jitter" ||
+                           std::string(sw.failure) == "tau";
+    for (int s = 1; s <= (secondary ? 1 : sweep_seeds); ++s)
+      for (const auto& rig : sweep_rigs)
+        for (double L : sw.levels) {
+          std::vector<std::string> ms = sweep_methods;
+          if (std::string(sw.failure) == "tau")  // methods without a threshold have no tau curve
+            ms = {"naive", "sagd", "gaussiancut", "ludvig", "vcar:coarse", "vcar:full"};
+          out.push_back(make(s, rig, sw.failure, L, ms));
+        }
+  }
+  // Number of training views.
+  if (want("views")) {
+    const std::vector<int> views = q ? std::vector<int>{6} : std::vector<int>{4, 8, 12, 20, 40};
+    for (int s = 1; s <= 1; ++s)
+      for (const auto& rig : sweep_rigs)
+        for (int n : views) {
+          Experiment e = make(s, rig, "views", n, sweep_methods);
+          e.n_train = n;
+          out.push_back(e);
+        }
+  }
+  // Scene size with the object fixed (forward rig): every stage of VCAR and the peers.
+  if (want("size")) {
+    std::vector<std::size_t> sizes = q ? std::vector<std::size_t>{25000, 60000}
+                                       : std::vector<std::size_t>{25000, 50000, 100000, 250000, 500000, 1000000};
+    for (std::size_t n : sizes) {
+      if (o.max_size && n > o.max_size) continue;
+      // The kNN-graph and max-contributor peers stop at 250k to keep the run within budget.
+      std::vector<std::string> ms = n <= 250000 ? all_methods(false)
+                                                : std::vector<std::string>{"naive", "sagd", "flashsplat", "vcar:full"};
+      Experiment e = make(1, "forward", "size", static_cast<double>(n), ms);
+      e.methods.push_back("vcar:coarse");
+      e.object_size = 25000;
+      e.total = n;
+      out.push_back(e);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) { std::fprintf(stderr, "%s needs a value\n", a.c_str()); std::exit(2); }
+      return argv[++i];
+    };
+    if (a == "--quick") o.quick = true;
+    else if (a == "--full") o.quick = false;
+    else if (a == "--out") o.out = value();
+    else if (a == "--seeds") o.seeds = std::stoi(value());
+    else if (a == "--max-size") o.max_size = std::stoul(value());
+    else if (a == "--only") o.only = value();
+    else if (a == "--set") o.set.push_back(value());
+    else if (a == "--methods") {
+      const std::string v = value();
+      for (std::size_t b = 0, c; b <= v.size(); b = c + 1) {
+        c = v.find(',', b);
+        if (c == std::string::npos) c = v.size();
+        if (c > b) o.methods.push_back(v.substr(b, c - b));
+      }
+    }
+    else {
+      std::fprintf(stderr, "usage: %s [--quick|--full] [--out DIR] [--seeds N] [--max-size N] "
+                           "[--only grid|sweeps|dilate|erode|blobs|drop|swap|jitter|tau|views|size] [--set key=value]... "
+                           "[--methods naive,vcar:full,...]\n", argv[0]);
+      return a == "--help" || a == "-h" ? 0 : 2;
+    }
+  }
+  try {
+    const auto t0 = Clock::now();
+    Driver d(o);
+    std::vector<Experiment> p = plan(o);
+    if (!o.methods.empty())
+      for (Experiment& e : p)
+        std::erase_if(e.methods, [&](const std::string& m) { return std::find(o.methods.begin(), o.methods.end(), m) == o.methods.end(); });
+    std::fprintf(stderr, "bench_evidence: %s mode, %zu experiments, %d threads -> %s\n", o.quick ? "quick" : "full",
+                 p.size(), max_threads(), o.out.string().c_str());
+    d.open();
+    for (std::size_t k = 0; k < p.size(); ++k) {
+      std::fprintf(stderr, "[%zu/%zu] %.0fs\n", k + 1, p.size(), since(t0));
+      d.run(p[k]);
+    }
+    d.write_summary(since(t0));
+    std::printf("bench_evidence: %zu experiments in %.1f s, CSV %s\n", p.size(), since(t0),
+                (o.out / "evidence.csv").string().c_str());
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_evidence: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
