@@ -50,17 +50,41 @@ inline void sh_basis(int degree, float x, float y, float z, float* Y) {
   Y[15] = sh::C3[6] * x * (xx - 3.f * yy);
 }
 
+namespace sh::detail {
+// sum_k Y[k] coeffs[k][c] for a fixed number of coefficients B, k ascending (unrolled: the
+// renderer calls this once per visible Gaussian).
+template <int B>
+inline void accumulate(const float* Y, const float* coeffs, float rgb[3]) {
+  float r = rgb[0], g = rgb[1], b = rgb[2];  // locals: rgb might alias coeffs, registers cannot
+  for (int k = 0; k < B; ++k) {
+    r += Y[k] * coeffs[k * 3 + 0];
+    g += Y[k] * coeffs[k * 3 + 1];
+    b += Y[k] * coeffs[k * 3 + 2];
+  }
+  rgb[0] = r, rgb[1] = g, rgb[2] = b;
+}
+}  // namespace sh::detail
+
 // rgb = max(0, 0.5 + sum_k Y_k(dir) sh[k][c]); `coeffs` holds (degree+1)^2 x 3 values [k][c]
 // and `dir` need not be normalised (a zero direction keeps only the DC term).
 inline Eigen::Vector3f sh_to_rgb(int degree, const float* coeffs, const Eigen::Vector3f& dir) {
-  const float n = dir.norm();
-  const Eigen::Vector3f d = n > 0.f ? Eigen::Vector3f(dir / n) : Eigen::Vector3f::Zero();
-  float Y[16];
-  sh_basis(degree, d.x(), d.y(), d.z(), Y);
+  assert(degree >= 0 && degree <= sh::max_degree);
   float rgb[3] = {0.f, 0.f, 0.f};
-  const int B = sh::coeffs(degree);
-  for (int k = 0; k < B; ++k)
-    for (int c = 0; c < 3; ++c) rgb[c] += Y[k] * coeffs[k * 3 + c];
+  float Y[16];
+  if (degree == 0) {
+    Y[0] = sh::C0;  // no direction needed
+    sh::detail::accumulate<1>(Y, coeffs, rgb);
+  } else {
+    const float n = std::sqrt(dir.squaredNorm());  // divide (not multiply by 1/n): same bits as dir / |dir|
+    const float x = n > 0.f ? dir.x() / n : 0.f, y = n > 0.f ? dir.y() / n : 0.f,
+                z = n > 0.f ? dir.z() / n : 0.f;
+    sh_basis(degree, x, y, z, Y);
+    switch (degree) {
+      case 1: sh::detail::accumulate<4>(Y, coeffs, rgb); break;
+      case 2: sh::detail::accumulate<9>(Y, coeffs, rgb); break;
+      default: sh::detail::accumulate<16>(Y, coeffs, rgb); break;
+    }
+  }
   return {std::max(0.f, 0.5f + rgb[0]), std::max(0.f, 0.5f + rgb[1]), std::max(0.f, 0.5f + rgb[2])};
 }
 

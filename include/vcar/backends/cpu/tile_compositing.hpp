@@ -3,6 +3,7 @@
 // alpha = min(0.999, opacity exp(-sigma)), skip alpha < 1/255, stop before the Gaussian whose
 // next transmittance T (1 - alpha) would be <= 1e-4 (gsplat does not composite that one).
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 
@@ -56,14 +57,45 @@ inline int clamp_ceil(float v, int hi) {
   return v >= static_cast<float>(hi) ? hi : static_cast<int>(std::max(std::ceil(v), -1.f));
 }
 
+// Colour of a splat, computed by colour(k, rgb) the first time a tile composites it (SH only
+// for splats that show). The value depends only on the Gaussian and the camera, so every tile
+// sees the same bits whichever thread computes it; a thread that loses the race keeps its copy.
+template <class ColourFn>
+inline void splat_colour(PackedSplat& s, ColourFn& colour, float rgb[3]) {
+  std::atomic_ref<std::uint32_t> state(s.shaded);
+  if (state.load(std::memory_order_acquire) == 2) {
+    rgb[0] = s.r, rgb[1] = s.g, rgb[2] = s.b;
+    return;
+  }
+  colour(s.k, rgb);
+  std::uint32_t idle = 0;
+  if (state.compare_exchange_strong(idle, 1, std::memory_order_acquire)) {
+    s.r = rgb[0], s.g = rgb[1], s.b = rgb[2];
+    state.store(2, std::memory_order_release);
+  }
+}
+
+// Colour functor for passes that need none (contributions only).
+struct NoColour {
+  void operator()(std::uint32_t, float* rgb) const { rgb[0] = rgb[1] = rgb[2] = 0.f; }
+};
+
 // Composites the splats ids[0..count) (front to back) into tile (x0, y0) of size
-// w_valid x h_valid. Colour: accumulate rgb and depth. Contrib: entry_w[e] / entry_wfg[e] get
-// sum alpha T and sum alpha T fg over the tile for entry e (entries never reached stay as given).
-template <bool Colour, bool Contrib>
-void composite_tile(const PackedSplat* splat, const std::uint32_t* ids, std::int64_t count, int x0,
-                    int y0, int w_valid, int h_valid, TileState& st, float* entry_w = nullptr,
-                    float* entry_wfg = nullptr) {
+// w_valid x h_valid. Colour: accumulate rgb (from splat_colour) and depth. Contrib: entry_w[e] /
+// entry_wfg[e] get sum alpha T and sum alpha T fg over the tile for entry e (entries never
+// reached stay as given).
+template <bool Colour, bool Contrib, class ColourFn = NoColour>
+void composite_tile(PackedSplat* splat, const std::uint32_t* ids, std::int64_t count, int x0, int y0,
+                    int w_valid, int h_valid, TileState& st, float* entry_w = nullptr,
+                    float* entry_wfg = nullptr, ColourFn colour = {}) {
   constexpr int L = static_cast<int>(Lane::size);
+  constexpr int NB = TileState::NB;
+  // 1 at bit r * NB of every row r: times a row's batch bits, the same bits on every row.
+  constexpr std::uint64_t row_ones = [] {
+    std::uint64_t m = 0;
+    for (int r = 0; r < tile_size; ++r) m |= std::uint64_t{1} << (r * NB);
+    return m;
+  }();
   alignas(64) float lane_x[tile_size];  // pixel-centre x of each column (CONVENTIONS 2)
   for (int c = 0; c < tile_size; ++c) lane_x[c] = static_cast<float>(x0 + c) + 0.5f;
   const Lane zero(0.f), one(1.f), amax(alpha_max), askip(alpha_skip), tstop(T_stop);
@@ -71,7 +103,7 @@ void composite_tile(const PackedSplat* splat, const std::uint32_t* ids, std::int
   constexpr std::int64_t ahead = 8;  // splats are scattered in memory: fetch a few ahead
   for (std::int64_t e = 0; e < count; ++e) {
     if (e + ahead < count) __builtin_prefetch(splat + ids[e + ahead]);
-    const PackedSplat& s = splat[ids[e]];
+    PackedSplat& s = splat[ids[e]];
     const float mx = s.mx, my = s.my, rx = s.rx, ry = s.ry;
     // Rows and columns of the tile inside the bounding box, widened by one pixel for rounding.
     const int r_lo = clamp_floor(my - ry - static_cast<float>(y0) - 1.f, 0);
@@ -79,34 +111,32 @@ void composite_tile(const PackedSplat* splat, const std::uint32_t* ids, std::int
     const int c_lo = clamp_floor(mx - rx - static_cast<float>(x0) - 1.f, 0);
     const int c_hi = clamp_ceil(mx + rx - static_cast<float>(x0) + 1.f, w_valid - 1);
     if (r_lo > r_hi || c_lo > c_hi) continue;
-    std::uint64_t cover = 0;  // batches under the bounding box
+    // Batches under the bounding box: the row's batch bits copied to rows r_lo..r_hi.
     const std::uint64_t row_bits = ((std::uint64_t{2} << (c_hi / L - c_lo / L)) - 1) << (c_lo / L);
-    for (int r = r_lo; r <= r_hi; ++r) cover |= row_bits << (r * TileState::NB);
+    const int rows = r_hi - r_lo + 1;
+    const std::uint64_t row_span = rows * NB >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << (rows * NB)) - 1;
+    const std::uint64_t cover = (row_bits * row_ones) & (row_span << (r_lo * NB));
     if ((cover & st.live) == 0) continue;  // every pixel it covers is done
     const float ca = s.ca, cb = s.cb, cc = s.cc;
     const float sig_max = s.sigma_max + 1e-2f;  // slack for rounding: the lanes decide exactly
-    const Lane half_ca(0.5f * ca), op(s.opacity);
+    const Lane half_ca(0.5f * ca), op(s.opacity), lane_sig_max(sig_max), lmx(mx), depth(s.depth);
     Lane sw = zero, swfg = zero;
-    bool stopped = false;
+    bool stopped = false, have_rgb = false;
+    Lane cr = zero, cg = zero, cbl = zero;  // the splat's colour, broadcast once
     for (int r = r_lo; r <= r_hi; ++r) {
+      if (!((st.live >> (r * NB)) & ((std::uint64_t{1} << NB) - 1))) continue;  // row done
       const float dy = my - (static_cast<float>(y0 + r) + 0.5f);
-      // Columns where sigma <= sigma_max (alpha >= 1/255): roots of 0.5 ca dx^2 + cb dy dx +
-      // 0.5 cc dy^2 - sigma_max, widened by a pixel; the SIMD test below decides exactly.
-      const float disc = cb * cb * dy * dy - ca * (cc * dy * dy - 2.f * sig_max);
-      if (disc < 0.f) continue;
-      const float sq = std::sqrt(disc), base = mx - static_cast<float>(x0) - 0.5f;
-      const int cl = clamp_floor(base - (-cb * dy + sq) / ca - 1.f, c_lo);
-      const int ch = clamp_ceil(base - (-cb * dy - sq) / ca + 1.f, c_hi);
-      if (cl > ch) continue;
+      // A tile row is NB batches: testing sigma per batch is cheaper than solving for the span.
       const Lane ydy(0.5f * cc * dy * dy), cbdy(cb * dy);
-      for (int b = cl / L; b <= ch / L; ++b) {
-        const int bit = r * TileState::NB + b;
+      for (int b = c_lo / L; b <= c_hi / L; ++b) {
+        const int bit = r * NB + b;
         if (!((st.live >> bit) & 1u)) continue;
         const int p = r * tile_size + b * L;
         const Lane act = Lane::load_aligned(st.active + p);
         const auto live = act > zero;
-        const Lane dx = Lane(mx) - Lane::load_aligned(lane_x + b * L);
+        const Lane dx = lmx - Lane::load_aligned(lane_x + b * L);
         const Lane sigma = half_ca * dx * dx + cbdy * dx + ydy;
+        if (!xsimd::any(live && (sigma <= lane_sig_max))) continue;  // alpha < 1/255: no exp
         const Lane alpha = xsimd::min(amax, op * xsimd::exp(-sigma));
         const auto ok = live && (sigma >= zero) && (alpha >= askip);
         if (!xsimd::any(ok)) continue;
@@ -125,10 +155,16 @@ void composite_tile(const PackedSplat* splat, const std::uint32_t* ids, std::int
           }
         }
         if constexpr (Colour) {
-          (Lane::load_aligned(st.cr + p) + w * Lane(s.r)).store_aligned(st.cr + p);
-          (Lane::load_aligned(st.cg + p) + w * Lane(s.g)).store_aligned(st.cg + p);
-          (Lane::load_aligned(st.cb + p) + w * Lane(s.b)).store_aligned(st.cb + p);
-          (Lane::load_aligned(st.D + p) + w * Lane(s.depth)).store_aligned(st.D + p);
+          if (!have_rgb) {
+            float rgb[3];
+            splat_colour(s, colour, rgb);
+            cr = Lane(rgb[0]), cg = Lane(rgb[1]), cbl = Lane(rgb[2]);
+            have_rgb = true;
+          }
+          (Lane::load_aligned(st.cr + p) + w * cr).store_aligned(st.cr + p);
+          (Lane::load_aligned(st.cg + p) + w * cg).store_aligned(st.cg + p);
+          (Lane::load_aligned(st.cb + p) + w * cbl).store_aligned(st.cb + p);
+          (Lane::load_aligned(st.D + p) + w * depth).store_aligned(st.D + p);
         }
         if constexpr (Contrib) {
           sw += w;

@@ -38,8 +38,17 @@ public:
   RenderOutput render(const RenderRequest& q) {
     const Camera& cam = check(q);
     ThreadScope threads(opt_.num_threads);
-    prepare(q, /*colour=*/true);
+    prepare(q);
     const int W = cam.width, H = cam.height;
+    // SH colour, evaluated lazily for the splats that get composited (splat_colour).
+    const GaussianScene& sc = *q.scene;
+    const Eigen::Vector3f eye = cam.position();
+    const std::size_t B3 = static_cast<std::size_t>(sc.sh_coeffs()) * 3;
+    auto colour = [&](std::uint32_t k, float* rgb) {
+      const std::size_t i = scene_index(q, k);
+      const Eigen::Vector3f c = sh_to_rgb(sc.sh_degree, sc.sh.data() + i * B3, sc.mu(i) - eye);
+      rgb[0] = c[0], rgb[1] = c[1], rgb[2] = c[2];
+    };
     RenderOutput out;
     out.rgb = ImageF(W, H, 3);
     out.alpha = ImageF(W, H, 1);
@@ -51,7 +60,8 @@ public:
       TileState st;
       st.reset(w, h);
       const std::int64_t b = bins_.start[t], e = bins_.start[t + 1];
-      composite_tile<true, false>(bins_.splat.data(), bins_.ids.data() + b, e - b, x0, y0, w, h, st);
+      composite_tile<true, false>(bins_.splat.data(), bins_.ids.data() + b, e - b, x0, y0, w, h, st,
+                                  nullptr, nullptr, colour);
       for (int r = 0; r < h; ++r)
         for (int c = 0; c < w; ++c) {
           const int p = r * tile_size + c;
@@ -79,7 +89,7 @@ public:
     if (acc.weight.size() != n || acc.weight_fg.size() != n)
       throw Error("contribution vectors must be sized like the scene", "Contributions");
     ThreadScope threads(opt_.num_threads);
-    prepare(q, /*colour=*/false);
+    prepare(q);
     const int W = cam.width, H = cam.height;
     entry_w_.assign(bins_.ids.size(), 0.f);
     entry_wfg_.assign(bins_.ids.size(), 0.f);
@@ -162,15 +172,13 @@ private:
   }
 
   // Projects every drawn Gaussian (one result per index, any thread count) and bins the tiles.
-  void prepare(const RenderRequest& q, bool colour) {
+  void prepare(const RenderRequest& q) {
     const GaussianScene& sc = *q.scene;
     const Camera& cam = *q.camera;
     const std::size_t n = q.subset ? q.subset->size() : sc.size();
     splats_.resize(n);
     const int tiles_x = (cam.width + tile_size - 1) / tile_size;
     const int tiles_y = (cam.height + tile_size - 1) / tile_size;
-    const Eigen::Vector3f eye = cam.position();
-    const std::size_t B3 = static_cast<std::size_t>(sc.sh_coeffs()) * 3;
     ProjectedSplats& s = splats_;
     const ProjectionParams& pp = opt_.projection;
     parallel_chunks(static_cast<std::int64_t>(n), 4096, [&](std::int64_t, std::int64_t b, std::int64_t e) {
@@ -183,12 +191,10 @@ private:
         const ProjectedGaussian g = project_gaussian(cam, mu, sc.R(i), log_s.array().exp().matrix(), opacity, pp);
         s.tx0[k] = s.tx1[k] = s.ty0[k] = s.ty1[k] = 0;
         if (!g.valid || !g.on_screen) continue;  // culled (gsplat)
-        const Eigen::Vector3f rgb = colour ? sh_to_rgb(sc.sh_degree, sc.sh.data() + i * B3, mu - eye)
-                                           : Eigen::Vector3f::Zero();
         PackedSplat& ps = s.splat[k];
         ps = {g.mean.x(), g.mean.y(), static_cast<float>(g.radius_x), static_cast<float>(g.radius_y),
-              g.conic[0], g.conic[1], g.conic[2], std::log(opacity / pp.alpha_min), opacity, g.depth,
-              rgb[0], rgb[1], rgb[2]};
+              g.conic[0], g.conic[1], g.conic[2], std::log(opacity / pp.alpha_min),
+              opacity, g.depth, 0.f, 0.f, 0.f, static_cast<std::uint32_t>(k), 0u};
         tile_rect(ps.mx, ps.rx, tiles_x, s.tx0[k], s.tx1[k]);
         tile_rect(ps.my, ps.ry, tiles_y, s.ty0[k], s.ty1[k]);
       }
