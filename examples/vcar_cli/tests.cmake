@@ -129,3 +129,8 @@ add_test(NAME cli/segment_interrupted
   COMMAND /bin/sh -c "\"$1\" segment --scene \"$2/scene.ply\" --cameras \"$2/cameras.json\" --prompt-view train_000 --points 1,1 --segmenter-cmd \"$3 --sleep 60\" --out \"$4\" & pid=$!; sleep 1; kill -INT $pid; wait $pid; rc=$?; test $rc -eq 4 || { echo \"exit $rc, expected 4\"; exit 1; }"
           sh $<TARGET_FILE:vcar_cli> ${_cli_ds} ${_picker} ${_cli_work}/interrupted)
 set_tests_properties(cli/segment_interrupted PROPERTIES FIXTURES_REQUIRED vcar_cli_dataset TIMEOUT 60)
+
+# ---- interrupted run (tests/regression/sigint_segment.sh): SIGINT leaves the previous output --
+add_test(NAME cli/segment_sigint_keeps_previous_output
+  COMMAND bash ${PROJECT_SOURCE_DIR}/tests/regression/sigint_segment.sh $<TARGET_FILE:vcar_cli> ${_cli_ds} ${_cli_work}/sigint)
+set_tests_properties(cli/segment_sigint_keeps_previous_output PROPERTIES TIMEOUT 120 FIXTURES_REQUIRED vcar_cli_dataset)

@@ -31,8 +31,8 @@ inline std::vector<Camera> cameras_from_inria_json(const nlohmann::json& j, cons
         if (!e.contains(key)) throw Error(entry + " has no '" + key + "'", where);
       Camera c;
       c.name = e.at("img_name").get<std::string>();
-      c.width = e.at("width").get<int>();
-      c.height = e.at("height").get<int>();
+      c.width = json_image_size(e.at("width"), "width");
+      c.height = json_image_size(e.at("height"), "height");
       c.fx = e.at("fx").get<float>();
       c.fy = e.at("fy").get<float>();
       c.cx = e.contains("cx") ? e.at("cx").get<float>() : 0.5f * static_cast<float>(c.width);

@@ -8,11 +8,15 @@
 //   except when the colour is black everywhere: then the alpha channel is the mask.
 // - a mask of another size than expected is an error naming the file and both sizes.
 // PNG writing is atomic (encoded in memory, then temp file + rename).
+#include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <ostream>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include <stb_image.h>
@@ -29,13 +33,54 @@ inline std::string stb_reason() {
   const char* r = stbi_failure_reason();
   return r ? r : "unknown reason";
 }
+
+// The whole file in memory (masks and frames are small; stb then decodes from memory).
+inline std::vector<stbi_uc> read_file_bytes(const std::filesystem::path& path, const std::string& where) {
+  std::ifstream in(path, std::ios::binary);
+  std::error_code ec;
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (!in || ec) throw Error("cannot open image file", where);
+  if (size > (std::uintmax_t{1} << 31)) throw Error("image file is larger than 2 GiB", where);
+  std::vector<stbi_uc> bytes(static_cast<std::size_t>(size));
+  in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  if (static_cast<std::size_t>(in.gcount()) != bytes.size()) throw Error("cannot read image file", where);
+  return bytes;
+}
+
+// Lying sizes are rejected before stb allocates for them: a PNG chunk longer than the rest of
+// the file (stb reserves the declared length first), or a header claiming more pixels than the
+// file can encode (no format stb decodes packs over 4096 raw bytes into one file byte).
+inline void check_image_bytes(const std::vector<stbi_uc>& b, const std::string& where) {
+  static constexpr stbi_uc png_sig[8] = {0x89, 'P', 'N', 'G', 0x0d, 0x0a, 0x1a, 0x0a};
+  if (b.size() >= 8 && std::equal(png_sig, png_sig + 8, b.begin()))
+    for (std::size_t at = 8; at + 8 <= b.size();) {
+      const std::uint64_t len = (std::uint64_t{b[at]} << 24) | (std::uint64_t{b[at + 1]} << 16) |
+                                (std::uint64_t{b[at + 2]} << 8) | b[at + 3];
+      if (len + 12 > b.size() - at)
+        throw Error("PNG chunk at byte " + std::to_string(at) + " declares " + std::to_string(len) +
+                    " bytes, more than the file holds (corrupt or truncated?)", where);
+      if (std::equal(b.begin() + static_cast<std::ptrdiff_t>(at) + 4, b.begin() + static_cast<std::ptrdiff_t>(at) + 8, "IEND")) break;
+      at += static_cast<std::size_t>(len) + 12;  // length, type, data, CRC
+    }
+  const int len = static_cast<int>(b.size());
+  int w = 0, h = 0, n = 0;
+  if (!stbi_info_from_memory(b.data(), len, &w, &h, &n)) throw Error("cannot read image: " + stb_reason(), where);
+  const double raw = static_cast<double>(w) * static_cast<double>(h) * static_cast<double>(n) *
+                     (stbi_is_16_bit_from_memory(b.data(), len) ? 2.0 : 1.0);
+  if (w <= 0 || h <= 0 || raw > 4096.0 * static_cast<double>(b.size()) + static_cast<double>(1 << 20))
+    throw Error("header claims " + std::to_string(w) + " x " + std::to_string(h) +
+                " pixels, more than the file can hold (corrupt or truncated?)", where);
+}
 }  // namespace detail
 
 // Any image stb can decode, as 8-bit RGB (grey is replicated, alpha dropped).
 inline ImageRGB8 read_image_rgb8(const std::filesystem::path& path) {
+  const std::string where = path.string();
+  const std::vector<stbi_uc> bytes = detail::read_file_bytes(path, where);
+  detail::check_image_bytes(bytes, where);
   int w = 0, h = 0, n = 0;
-  stbi_uc* px = stbi_load(path.string().c_str(), &w, &h, &n, 3);
-  if (!px) throw Error("cannot read image: " + detail::stb_reason(), path.string());
+  stbi_uc* px = stbi_load_from_memory(bytes.data(), static_cast<int>(bytes.size()), &w, &h, &n, 3);
+  if (!px) throw Error("cannot read image: " + detail::stb_reason(), where);
   ImageRGB8 img(w, h, 3);
   std::copy(px, px + img.data.size(), img.data.begin());
   stbi_image_free(px);
@@ -72,15 +117,19 @@ inline void write_png(const std::filesystem::path& path, const ImageF& img) {
 // A binary mask (see the top of this file); expected_width/height < 0 accept any size.
 inline Mask read_mask(const std::filesystem::path& path, int expected_width = -1, int expected_height = -1) {
   const std::string where = path.string();
-  const std::string file = path.string();
+  const std::vector<stbi_uc> bytes = detail::read_file_bytes(path, where);
+  const int len = static_cast<int>(bytes.size());
   int w = 0, h = 0, n = 0;
-  if (!stbi_info(file.c_str(), &w, &h, &n)) throw Error("cannot read mask: " + detail::stb_reason(), where);
+  if (!stbi_info_from_memory(bytes.data(), len, &w, &h, &n)) throw Error("cannot read mask: " + detail::stb_reason(), where);
   if ((expected_width >= 0 && w != expected_width) || (expected_height >= 0 && h != expected_height))
     throw Error("mask is " + std::to_string(w) + " x " + std::to_string(h) + " but the view is " +
                 std::to_string(expected_width) + " x " + std::to_string(expected_height), where);
-  Mask m(w, h, 1);
-  const std::size_t N = m.pixels();
+  detail::check_image_bytes(bytes, where);
+  Mask m;
+  std::size_t N = 0;
   auto fill = [&](const auto* px) {
+    m = Mask(w, h, 1);  // sized from the decoded image, not from the header alone
+    N = m.pixels();
     const int colour = (n == 2 || n == 4) ? n - 1 : n;  // channels before alpha
     bool any_colour = false;
     for (std::size_t p = 0; p < N; ++p) {
@@ -92,16 +141,16 @@ inline Mask read_mask(const std::filesystem::path& path, int expected_width = -1
     if (!any_colour && colour != n)  // black everywhere: the alpha channel carries the mask
       for (std::size_t p = 0; p < N; ++p) m.data[p] = px[p * n + colour] != 0 ? 255 : 0;
   };
-  if (stbi_is_16_bit(file.c_str())) {
+  if (stbi_is_16_bit_from_memory(bytes.data(), len)) {
     int n2 = 0;
-    stbi_us* px = stbi_load_16(file.c_str(), &w, &h, &n2, 0);
+    stbi_us* px = stbi_load_16_from_memory(bytes.data(), len, &w, &h, &n2, 0);
     if (!px) throw Error("cannot read mask: " + detail::stb_reason(), where);
     n = n2;
     fill(px);
     stbi_image_free(px);
   } else {
     int n2 = 0;
-    stbi_uc* px = stbi_load(file.c_str(), &w, &h, &n2, 0);
+    stbi_uc* px = stbi_load_from_memory(bytes.data(), len, &w, &h, &n2, 0);
     if (!px) throw Error("cannot read mask: " + detail::stb_reason(), where);
     n = n2;
     fill(px);

@@ -2,6 +2,7 @@
 // JSON files for the camera readers: parse errors and type errors become vcar::Error naming the
 // file; floats are written by their shortest decimal form so that they read back bit-exact.
 #include <charconv>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -40,6 +41,20 @@ void read_entry(const std::string& entry, const std::string& where, F&& read) {
     if (ex.where() == where) throw;
     throw Error(entry + ": " + ex.what(), where);
   }
+}
+
+// An image size from JSON: an integer number in 1 .. 2^30 (a float or a huge value would be
+// undefined behaviour as an int).
+inline int json_image_size(double v, const std::string& what) {
+  if (!(v >= 1.0 && v <= static_cast<double>(1 << 30)) || v != static_cast<double>(static_cast<long long>(v)))
+    throw Error(what + " must be an integer in 1 .. 2^30");
+  return static_cast<int>(v);
+}
+inline int json_image_size(const nlohmann::json& v, const std::string& what) {
+  if (!v.is_number()) throw Error(what + " must be a number");
+  if (v.is_number_unsigned()) return json_image_size(v.get<std::uint64_t>() > (1u << 30) ? 0.0 : static_cast<double>(v.get<std::uint64_t>()), what);
+  if (v.is_number_integer()) { const auto i = v.get<std::int64_t>(); return json_image_size(i < 1 || i > (1 << 30) ? 0.0 : static_cast<double>(i), what); }
+  return json_image_size(v.get<double>(), what);
 }
 
 // A float as the double that prints shortest (0.1f -> 0.1, not 0.10000000149011612).

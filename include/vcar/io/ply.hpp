@@ -171,8 +171,9 @@ inline float decode_ply_value(const unsigned char* p, PlyType t) {
   return 0.f;
 }
 
-// Where a vertex property lands: value of Gaussian i at base[i * stride].
-struct PlyTarget { float* base = nullptr; std::size_t stride = 1; };
+// Where a vertex property lands: value of Gaussian i at base[offset + i * stride] (the offset
+// is kept apart: with 0 vertices base is null, and null + offset is undefined behaviour).
+struct PlyTarget { float* base = nullptr; std::size_t offset = 0, stride = 1; };
 
 inline bool parse_index_suffix(std::string_view name, std::string_view prefix, int& k) {
   if (name.size() <= prefix.size() || name.substr(0, prefix.size()) != prefix) return false;
@@ -377,18 +378,18 @@ inline GaussianScene read_ply(const std::filesystem::path& path) {
     const std::string& nm = v->props[q].name;
     int k = 0;
     auto& t = target[q];
-    if (nm == "x" || nm == "y" || nm == "z") t = {scene.mean[static_cast<std::size_t>(nm[0] - 'x')].data(), 1};
-    else if (nm == "opacity") t = {scene.opacity_logit.data(), 1};
-    else if (detail::parse_index_suffix(nm, "scale_", k) && k < 3) t = {scene.log_scale[static_cast<std::size_t>(k)].data(), 1};
-    else if (detail::parse_index_suffix(nm, "rot_", k) && k < 4) t = {scene.rotation[static_cast<std::size_t>(k)].data(), 1};
-    else if (detail::parse_index_suffix(nm, "f_dc_", k) && k < 3) t = {scene.sh.data() + k, B * 3};
+    if (nm == "x" || nm == "y" || nm == "z") t = {scene.mean[static_cast<std::size_t>(nm[0] - 'x')].data(), 0, 1};
+    else if (nm == "opacity") t = {scene.opacity_logit.data(), 0, 1};
+    else if (detail::parse_index_suffix(nm, "scale_", k) && k < 3) t = {scene.log_scale[static_cast<std::size_t>(k)].data(), 0, 1};
+    else if (detail::parse_index_suffix(nm, "rot_", k) && k < 4) t = {scene.rotation[static_cast<std::size_t>(k)].data(), 0, 1};
+    else if (detail::parse_index_suffix(nm, "f_dc_", k) && k < 3) t = {scene.sh.data(), static_cast<std::size_t>(k), B * 3};
     else if (detail::parse_index_suffix(nm, "f_rest_", k)) {
       const std::size_t c = static_cast<std::size_t>(k) / (B - 1), kk = static_cast<std::size_t>(k) % (B - 1) + 1;
-      t = {scene.sh.data() + kk * 3 + c, B * 3};  // channel-major file -> [i][k][c]
+      t = {scene.sh.data(), kk * 3 + c, B * 3};  // channel-major file -> [i][k][c]
     } else if (detail::ply_is_standard_name(nm)) {
       throw Error("unexpected property '" + nm + "' (index out of range)", where);
     } else {
-      t = {scene.extra.data() + e, E};
+      t = {scene.extra.data(), e, E};
       ++e;
     }
   }
@@ -405,7 +406,7 @@ inline GaussianScene read_ply(const std::filesystem::path& path) {
       for (std::size_t r = 0; r < rows; ++r) {
         const unsigned char* row = buf.data() + r * stride;
         for (std::size_t q = 0; q < target.size(); ++q)
-          target[q].base[(r0 + r) * target[q].stride] = detail::decode_ply_value(row + v->props[q].offset, v->props[q].type);
+          target[q].base[target[q].offset + (r0 + r) * target[q].stride] = detail::decode_ply_value(row + v->props[q].offset, v->props[q].type);
       }
     }
   } else {
@@ -438,7 +439,7 @@ inline GaussianScene read_ply(const std::filesystem::path& path) {
         if (res.ec != std::errc() || res.ptr != tok_end)
           throw Error("vertex " + std::to_string(i) + ", property '" + v->props[q].name + "': '" +
                       std::string(p, tok_end) + "' is not a number", where);
-        target[q].base[i * target[q].stride] = value;
+        target[q].base[target[q].offset + i * target[q].stride] = value;
         p = tok_end;
       }
   }

@@ -67,8 +67,8 @@ inline std::vector<Camera> cameras_from_transforms(const nlohmann::json& j, cons
         w = iw;
         h = ih;
       }
-      c.width = static_cast<int>(*w);
-      c.height = static_cast<int>(*h);
+      c.width = json_image_size(*w, "w");
+      c.height = json_image_size(*h, "h");
       if (auto fl = get("fl_x")) c.fx = static_cast<float>(*fl);
       else if (auto ax = get("camera_angle_x")) c.fx = static_cast<float>(0.5 * *w / std::tan(0.5 * *ax));
       else throw Error(entry + ": no focal length (fl_x or camera_angle_x)", where);

@@ -1,0 +1,19 @@
+// libFuzzer target: io::read_ply on arbitrary bytes (binary and ASCII PLY). vcar::Error is the
+// expected answer to bad input; any other exception, crash, leak or huge allocation is a bug.
+#include <cstddef>
+#include <cstdint>
+
+#include "fuzz_input.hpp"
+#include "vcar/io/ply.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const auto path = vcar::fuzz::write_input("scene.ply", data, size);
+  try {
+    const vcar::GaussianScene s = vcar::io::read_ply(path);
+    // A scene that reads must write and read back to the same size.
+    vcar::io::write_ply(vcar::fuzz::work_dir() / "back.ply", s);
+    if (vcar::io::read_ply(vcar::fuzz::work_dir() / "back.ply").size() != s.size()) __builtin_trap();
+  } catch (const vcar::Error&) {
+  }
+  return 0;
+}
