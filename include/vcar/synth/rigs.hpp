@@ -112,7 +112,11 @@ inline Rig forward_facing_rig(const World& w, const RigParams& p = {}) {
     if (ja * ja + jb * jb < best) { best = ja * ja + jb * jb; rig.reference = static_cast<std::size_t>(k); }
   }
   for (int k = 0; k < n_eval; ++k)  // random points of the patch: never a training position
-    rig.eval.push_back(at(rng.uniform(-0.9f, 0.9f), rng.uniform(-0.9f, 0.9f), detail::view_name("eval", k)));
+  {
+    const float eb = rng.uniform(-0.9f, 0.9f);  // drawn before ea: argument order is unspecified
+    const float ea = rng.uniform(-0.9f, 0.9f);
+    rig.eval.push_back(at(ea, eb, detail::view_name("eval", k)));
+  }
   return rig;
 }
 

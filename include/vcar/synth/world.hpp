@@ -182,7 +182,11 @@ inline std::vector<Primitive> make_layout(const WorldParams& wp) {
   rod.texture = random_texture(rng, Pattern::solid);
   const float rr = 0.012f;
   const Eigen::Vector3f E(nb.t.x() + nb.params[0], rng.uniform(-0.3f, 0.3f) * nb.params[1], 2.f * hz);
-  const Eigen::Vector3f F(E.x() + rng.uniform(0.5f, 0.9f) * 2.f * hz, E.y() + rng.uniform(-0.1f, 0.1f), rr);
+  // Random draws are sequenced explicitly (argument order is unspecified in C++; this is the
+  // order the generator has always used, so worlds stay the same bytes on every compiler).
+  const float F_dy = rng.uniform(-0.1f, 0.1f);
+  const float F_dx = rng.uniform(0.5f, 0.9f);
+  const Eigen::Vector3f F(E.x() + F_dx * 2.f * hz, E.y() + F_dy, rr);
   const Eigen::Vector3f d0 = (E - F).normalized();
   const Eigen::Vector3f perp = Eigen::Vector3f(-d0.z(), 0.f, d0.x()).normalized();  // up and away
   const Eigen::Vector3f top = E + rr * (perp.z() > 0.f ? perp : Eigen::Vector3f(-perp));
@@ -212,7 +216,9 @@ inline std::vector<Primitive> make_layout(const WorldParams& wp) {
     }
     q.texture = random_texture(rng, static_cast<Pattern>(rng.uniform_int(0, 3)));
     for (int attempt = 0; attempt < 200; ++attempt) {
-      const Eigen::Vector2f c(rng.uniform(-0.85f, 0.85f), rng.uniform(-0.85f, 0.85f));
+      const float cy = rng.uniform(-0.85f, 0.85f);  // drawn before cx (see F above)
+      const float cx = rng.uniform(-0.85f, 0.85f);
+      const Eigen::Vector2f c(cx, cy);
       bool ok = std::max(std::abs(c.x()), std::abs(c.y())) + foot < 0.98f;
       for (auto& [uc, ur] : used) ok = ok && (c - uc).norm() > ur + foot + 0.05f;
       if (ok) { q.t.head<2>() = c; used.push_back({c, foot}); P.push_back(q); break; }
@@ -271,11 +277,13 @@ inline World generate_world(const WorldParams& wp = {}) {
     SurfaceSample smp = sample_surface(P[k], rng);
     for (int attempt = 0; attempt < 64 && detail::buried(P, k, smp.p); ++attempt) smp = sample_surface(P[k], rng);
     const float h = std::sqrt(area(P[k]) / static_cast<float>(count[k]));
-    const Eigen::Vector3f s(wp.disc_scale * h * rng.uniform(0.75f, 1.25f), wp.disc_scale * h * rng.uniform(0.75f, 1.25f),
-                            wp.normal_scale * h);
+    const float s1 = rng.uniform(0.75f, 1.25f);  // drawn before s0 (see F above)
+    const float s0 = rng.uniform(0.75f, 1.25f);
+    const Eigen::Vector3f s(wp.disc_scale * h * s0, wp.disc_scale * h * s1, wp.normal_scale * h);
     const Eigen::Vector3f jitter = Eigen::Vector3f::Constant(rng.uniform(-0.03f, 0.03f));
-    detail::put_gaussian(g, i, smp.p, smp.n, detail::random_tangent(smp.n, rng), s, rng.uniform(0.92f, 0.99f),
-                         surface_colour(P[k], smp.local) + jitter);
+    const float opacity = rng.uniform(0.92f, 0.99f);  // drawn before the tangent (see F above)
+    const Eigen::Vector3f tangent = detail::random_tangent(smp.n, rng);
+    detail::put_gaussian(g, i, smp.p, smp.n, tangent, s, opacity, surface_colour(P[k], smp.local) + jitter);
     w.object_id[i] = P[k].object_id;
   });
 
@@ -297,9 +305,12 @@ inline World generate_world(const WorldParams& wp = {}) {
       smp = sample_surface(P[k], rng);
     }
     const float big = h_global * rng.uniform(2.f, 4.f);
-    const Eigen::Vector3f s(big, big * rng.uniform(0.6f, 1.f), h_global * rng.uniform(0.5f, 1.f));
-    detail::put_gaussian(g, i, smp.p, smp.n, detail::random_tangent(smp.n, rng), s, rng.uniform(0.5f, 0.9f),
-                         surface_colour(P[k], smp.local));
+    const float s2 = rng.uniform(0.5f, 1.f);  // sequenced: s2, s1, opacity, tangent (see F above)
+    const float s1 = rng.uniform(0.6f, 1.f);
+    const Eigen::Vector3f s(big, big * s1, h_global * s2);
+    const float opacity = rng.uniform(0.5f, 0.9f);
+    const Eigen::Vector3f tangent = detail::random_tangent(smp.n, rng);
+    detail::put_gaussian(g, i, smp.p, smp.n, tangent, s, opacity, surface_colour(P[k], smp.local));
     w.object_id[i] = P[k].object_id;
   });
 
@@ -311,8 +322,9 @@ inline World generate_world(const WorldParams& wp = {}) {
     SurfaceSample smp = sample_surface(P[k], rng);
     for (int attempt = 0; attempt < 64 && detail::buried(P, k, smp.p); ++attempt) smp = sample_surface(P[k], rng);
     const Eigen::Vector3f s(h_global * rng.uniform(4.f, 8.f), 0.3f * h_global, wp.normal_scale * h_global);
-    detail::put_gaussian(g, i, smp.p, smp.n, detail::random_tangent(smp.n, rng), s, rng.uniform(0.6f, 0.95f),
-                         surface_colour(P[k], smp.local));
+    const float opacity = rng.uniform(0.6f, 0.95f);  // drawn before the tangent (see F above)
+    const Eigen::Vector3f tangent = detail::random_tangent(smp.n, rng);
+    detail::put_gaussian(g, i, smp.p, smp.n, tangent, s, opacity, surface_colour(P[k], smp.local));
     w.object_id[i] = P[k].object_id;
   });
 
@@ -320,14 +332,18 @@ inline World generate_world(const WorldParams& wp = {}) {
   parallel_for(static_cast<std::int64_t>(n_float), [&](std::int64_t jj) {
     const std::size_t i = n_surf + n_strad + n_needle + static_cast<std::size_t>(jj);
     Rng rng(wp.seed, 4, i);
-    const Eigen::Vector3f p(rng.uniform(-1.f, 1.f), rng.uniform(-1.f, 1.f), rng.uniform(0.05f, 0.9f));
-    Eigen::Vector3f n(rng.uniform(-1.f, 1.f), rng.uniform(-1.f, 1.f), rng.uniform(-1.f, 1.f));
+    Eigen::Vector3f p, n;  // components drawn z, y, x (see F above)
+    p.z() = rng.uniform(0.05f, 0.9f); p.y() = rng.uniform(-1.f, 1.f); p.x() = rng.uniform(-1.f, 1.f);
+    n.z() = rng.uniform(-1.f, 1.f); n.y() = rng.uniform(-1.f, 1.f); n.x() = rng.uniform(-1.f, 1.f);
     n = n.squaredNorm() > 1e-6f ? n.normalized() : Eigen::Vector3f::UnitZ();
     const float big = h_global * rng.uniform(2.f, 5.f);
     const float grey = rng.uniform(0.3f, 0.8f);
-    detail::put_gaussian(g, i, p, n, detail::random_tangent(n, rng),
-                         Eigen::Vector3f(big, big * rng.uniform(0.5f, 1.f), big * rng.uniform(0.3f, 1.f)),
-                         rng.uniform(0.03f, 0.25f), Eigen::Vector3f::Constant(grey));
+    const float opacity = rng.uniform(0.03f, 0.25f);  // sequenced: opacity, s2, s1, tangent
+    const float s2 = rng.uniform(0.3f, 1.f);
+    const float s1 = rng.uniform(0.5f, 1.f);
+    const Eigen::Vector3f tangent = detail::random_tangent(n, rng);
+    detail::put_gaussian(g, i, p, n, tangent, Eigen::Vector3f(big, big * s1, big * s2), opacity,
+                         Eigen::Vector3f::Constant(grey));
     w.object_id[i] = -1;
   });
   return w;
