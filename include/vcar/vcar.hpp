@@ -7,6 +7,7 @@
 #include "vcar/core/camera.hpp"
 #include "vcar/core/image.hpp"
 #include "vcar/core/rle_mask.hpp"
+#include "vcar/core/distance_transform.hpp"
 #include "vcar/core/parallel.hpp"
 #include "vcar/core/projection.hpp"
 #include "vcar/core/spherical_harmonics.hpp"

@@ -95,15 +95,15 @@ TEST_CASE("distance transform matches brute force") {
   const int W = 23, H = 17;
   std::vector<std::uint8_t> seed(W * H, 0);
   for (int k = 0; k < 9; ++k) seed[rng() % (W * H)] = 1;
-  const auto d2 = vcar::eval::squared_distance_to(seed, W, H);
+  const auto d2 = vcar::squared_distance_to(seed, W, H);
   for (int y = 0; y < H; ++y)
     for (int x = 0; x < W; ++x) {
-      double best = vcar::eval::no_seed;
+      double best = vcar::no_seed;
       for (int yy = 0; yy < H; ++yy)
         for (int xx = 0; xx < W; ++xx)
           if (seed[yy * W + xx]) best = std::min(best, double((x - xx) * (x - xx) + (y - yy) * (y - yy)));
       REQUIRE(d2[y * W + x] == best);
     }
-  const auto none = vcar::eval::squared_distance_to(std::vector<std::uint8_t>(W * H, 0), W, H);
-  CHECK(none[5] == vcar::eval::no_seed);
+  const auto none = vcar::squared_distance_to(std::vector<std::uint8_t>(W * H, 0), W, H);
+  CHECK(none[5] == vcar::no_seed);
 }

@@ -24,7 +24,7 @@
 #include <vector>
 
 #include "vcar/core/image.hpp"
-#include "vcar/eval/distance_transform.hpp"
+#include "vcar/core/distance_transform.hpp"
 #include "vcar/eval/mask_metrics.hpp"
 
 namespace vcar::eval {

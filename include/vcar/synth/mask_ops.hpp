@@ -1,66 +1,25 @@
 #pragma once
 // Mask operations behind the oracle's failure models: exact Euclidean dilation and erosion
-// (disc structuring element, via the squared distance transform of Felzenszwalb and
-// Huttenlocher 2012), integer shifts and painted discs.
+// (disc structuring element, via core/distance_transform.hpp), integer shifts and painted discs.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <vector>
 
+#include "vcar/core/distance_transform.hpp"
 #include "vcar/core/image.hpp"
 #include "vcar/core/parallel.hpp"
 
 namespace vcar::synth {
 
-namespace detail {
-// 1D squared distance transform of f (size n) into d, with scratch v, z (lower envelope).
-inline void edt_1d(const float* f, float* d, int n, int* v, float* z) {
-  constexpr float inf = std::numeric_limits<float>::infinity();
-  int k = 0;
-  v[0] = 0; z[0] = -inf; z[1] = inf;
-  for (int q = 1; q < n; ++q) {
-    if (f[q] == inf) continue;
-    if (f[v[k]] == inf) { v[k] = q; continue; }  // envelope so far is empty
-    float s;
-    while (true) {
-      s = ((f[q] + static_cast<float>(q) * q) - (f[v[k]] + static_cast<float>(v[k]) * v[k])) / (2.f * (q - v[k]));
-      if (s <= z[k] && k > 0) { --k; continue; }
-      break;
-    }
-    ++k; v[k] = q; z[k] = s; z[k + 1] = inf;
-  }
-  k = 0;
-  for (int q = 0; q < n; ++q) {
-    while (z[k + 1] < static_cast<float>(q)) ++k;
-    const float dq = static_cast<float>(q - v[k]);
-    d[q] = f[v[k]] == inf ? inf : dq * dq + f[v[k]];
-  }
-}
-}  // namespace detail
-
 // Squared Euclidean distance (pixel centres) from every pixel to the nearest pixel where
 // (mask != 0) == `to_foreground`; infinity when there is none.
 inline std::vector<float> squared_distance(const Mask& m, bool to_foreground) {
-  constexpr float inf = std::numeric_limits<float>::infinity();
-  const int W = m.width, H = m.height;
-  std::vector<float> g(static_cast<std::size_t>(W) * H);
-  for (std::size_t k = 0; k < g.size(); ++k) g[k] = ((m.data[k] != 0) == to_foreground) ? 0.f : inf;
-  parallel_for(W, [&](std::int64_t x) {  // columns
-    std::vector<float> f(H), d(H), z(H + 1);
-    std::vector<int> v(H);
-    for (int y = 0; y < H; ++y) f[y] = g[static_cast<std::size_t>(y) * W + x];
-    detail::edt_1d(f.data(), d.data(), H, v.data(), z.data());
-    for (int y = 0; y < H; ++y) g[static_cast<std::size_t>(y) * W + x] = d[y];
-  });
-  parallel_for(H, [&](std::int64_t y) {  // rows
-    std::vector<float> f(W), z(W + 1);
-    std::vector<int> v(W);
-    float* row = g.data() + static_cast<std::size_t>(y) * W;
-    std::copy(row, row + W, f.begin());
-    detail::edt_1d(f.data(), row, W, v.data(), z.data());
-  });
-  return g;
+  std::vector<std::uint8_t> seed(m.data.size());
+  for (std::size_t k = 0; k < seed.size(); ++k) seed[k] = (m.data[k] != 0) == to_foreground;
+  const std::vector<double> d2 = squared_distance_to(seed, m.width, m.height);  // core
+  return std::vector<float>(d2.begin(), d2.end());  // integers (or infinity): exact in float
 }
 
 // Dilation (k > 0) or erosion (k < 0) by a Euclidean disc of radius |k| px: a pixel joins when

@@ -1,6 +1,7 @@
 #pragma once
 // Exact squared Euclidean distance transform of a binary image (Felzenszwalb & Huttenlocher 2012):
-// for every pixel, the squared distance between pixel centres to the nearest seed pixel.
+// for every pixel, the squared distance between pixel centres to the nearest seed pixel. Shared by
+// the boundary metrics (eval) and the oracle's dilation/erosion (synth).
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -8,11 +9,11 @@
 
 #include "vcar/core/parallel.hpp"
 
-namespace vcar::eval {
+namespace vcar {
 
 inline constexpr double no_seed = std::numeric_limits<double>::infinity();
 
-namespace detail {
+namespace detail {  // vcar::detail
 // Lower envelope of the parabolas (x - q)^2 + f[q] over the finite f[q]; writes d[0..n).
 // Infinite samples add no parabola, so rows or columns without seeds stay infinite.
 inline void distance_1d(const double* f, std::ptrdiff_t stride, int n, double* d, std::vector<int>& v,
@@ -66,4 +67,4 @@ inline std::vector<double> squared_distance_to(const std::vector<std::uint8_t>& 
   return f;
 }
 
-}  // namespace vcar::eval
+}  // namespace vcar
