@@ -3,9 +3,8 @@
 // the valid-camera filter (A.1) share, so both apply exactly the same visibility test.
 #include <cstdint>
 
-#include <xsimd/xsimd.hpp>
-
 #include "vcar/core/camera.hpp"
+#include "vcar/core/simd.hpp"
 
 namespace vcar::detail {
 
@@ -26,21 +25,21 @@ struct MeanProjection {
   }
 };
 
-inline constexpr std::size_t mean_batch = xsimd::batch<float>::size;
+inline constexpr std::size_t mean_batch = simd::width;
 
 // Eq. 1 for one batch of means, in registers: pixel index row * W + col of the containing
 // pixel (0 when invisible), visibility (0/1) and camera depth z per lane.
 struct ProjectedBatch {
-  xsimd::batch<std::int32_t> pix, vis;
-  xsimd::batch<float> z;
+  simd::batch<std::int32_t> pix, vis;
+  simd::batch<float> z;
 };
 
 inline ProjectedBatch project(const MeanProjection& w, const float* x, const float* y, const float* z) {
-  using B = xsimd::batch<float>;
-  using BI = xsimd::batch<std::int32_t>;
+  using B = simd::batch<float>;
+  using BI = simd::batch<std::int32_t>;
   const B X = B::load_unaligned(x), Y = B::load_unaligned(y), Z = B::load_unaligned(z);
   auto row = [&](int r) {  // t = R_w mu + t_w
-    return xsimd::fma(B(w.R[3 * r]), X, xsimd::fma(B(w.R[3 * r + 1]), Y, xsimd::fma(B(w.R[3 * r + 2]), Z, B(w.t[r]))));
+    return simd::fma(B(w.R[3 * r]), X, simd::fma(B(w.R[3 * r + 1]), Y, simd::fma(B(w.R[3 * r + 2]), Z, B(w.t[r]))));
   };
   const B tx = row(0), ty = row(1), tz = row(2);
   const B u = (B(w.fx) * tx) / tz + B(w.cx);  // CONVENTIONS 2: u = fx x / z + cx
@@ -48,9 +47,9 @@ inline ProjectedBatch project(const MeanProjection& w, const float* x, const flo
   // Eq. 1: z > 0, 0 <= u < W, 0 <= v < H (NaN fails every comparison).
   const auto in = (tz > B(0.f)) & (u >= B(0.f)) & (u < B(static_cast<float>(w.width))) &
                   (v >= B(0.f)) & (v < B(static_cast<float>(w.height)));
-  const BI iu = xsimd::to_int(xsimd::select(in, u, B(0.f)));  // truncation = floor for u >= 0
-  const BI iv = xsimd::to_int(xsimd::select(in, v, B(0.f)));
-  return {iv * BI(w.width) + iu, xsimd::to_int(xsimd::select(in, B(1.f), B(0.f))), tz};
+  const BI iu = simd::to_int(simd::select(in, u, B(0.f)));  // truncation = floor for u >= 0
+  const BI iv = simd::to_int(simd::select(in, v, B(0.f)));
+  return {iv * BI(w.width) + iu, simd::to_int(simd::select(in, B(1.f), B(0.f))), tz};
 }
 
 // project() stored to arrays of mean_batch lanes.

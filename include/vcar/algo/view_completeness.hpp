@@ -12,13 +12,13 @@
 #include <vector>
 
 #include <Eigen/Core>
-#include <xsimd/xsimd.hpp>
 
 #include "vcar/algo/mean_projection.hpp"
 #include "vcar/core/camera.hpp"
 #include "vcar/core/error.hpp"
 #include "vcar/core/gaussian_scene.hpp"
 #include "vcar/core/parallel.hpp"
+#include "vcar/core/simd.hpp"
 
 namespace vcar {
 
@@ -138,7 +138,7 @@ inline AngularGap max_angular_gap(const Directions& t, const Directions& h) {
     if (t.size() > 0) g.direction = t[0];
     return g;
   }
-  using B = xsimd::batch<float>;
+  using B = simd::batch<float>;
   constexpr std::size_t L = B::size;
   const std::size_t K = t.size(), J = h.size();
   float worst = 2.f;  // min over probes of the best cosine
@@ -153,7 +153,7 @@ inline AngularGap max_angular_gap(const Directions& t, const Directions& h) {
     const B X = B::load_aligned(px), Y = B::load_aligned(py), Z = B::load_aligned(pz);
     B b(-2.f);
     for (std::size_t j = 0; j < J; ++j)
-      b = xsimd::max(b, xsimd::fma(X, B(h.x[j]), xsimd::fma(Y, B(h.y[j]), Z * B(h.z[j]))));  // C_ij = t_i . h_j
+      b = simd::max(b, simd::fma(X, B(h.x[j]), simd::fma(Y, B(h.y[j]), Z * B(h.z[j]))));  // C_ij = t_i . h_j
     b.store_aligned(best);
     for (std::size_t l = 0; l < m; ++l)
       if (best[l] < worst) { worst = best[l]; worst_i = i0 + l; }

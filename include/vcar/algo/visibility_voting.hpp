@@ -25,11 +25,6 @@
 #include <utility>
 #include <vector>
 
-#include <xsimd/xsimd.hpp>
-#if defined(__AVX2__)
-#include <immintrin.h>
-#endif
-
 #include "vcar/algo/mean_projection.hpp"
 #include "vcar/core/camera.hpp"
 #include "vcar/core/error.hpp"
@@ -59,17 +54,6 @@ inline void pack_mask_bits(const Mask& m, std::uint8_t* bits) {
     for (std::size_t p = full * 8; p < n; ++p) b |= static_cast<std::uint8_t>((src[p] != 0) << (p - full * 8));
     bits[full] = b;
   }
-}
-
-// words[idx] per lane. xsimd 8.1's AVX2 gather overload is never selected (its enable_if is
-// malformed), so the AVX2 instruction is named here; other targets use xsimd's generic gather.
-inline xsimd::batch<std::int32_t> gather_words(const std::int32_t* words, const xsimd::batch<std::int32_t>& idx) {
-#if defined(__AVX2__)
-  if constexpr (xsimd::batch<std::int32_t>::size == 8) return _mm256_i32gather_epi32(words, idx, 4);
-  else return xsimd::batch<std::int32_t>::gather(words, idx);
-#else
-  return xsimd::batch<std::int32_t>::gather(words, idx);
-#endif
 }
 
 static_assert(std::endian::native == std::endian::little, "packed masks are read as little-endian words");
@@ -134,7 +118,7 @@ inline void vote_range(const float* x, const float* y, const float* z, std::size
   constexpr std::size_t L = mean_batch, S = 512;  // slice of candidates
   if (std::any_of(views.begin(), views.end(), [](const VoteView& w) { return w.depth != nullptr; }))
     return vote_range_general(x, y, z, begin, end, views, bits, n_objects, visible, fg, n);
-  using BI = xsimd::batch<std::int32_t>;
+  using BI = simd::batch<std::int32_t>;
   const std::size_t K = static_cast<std::size_t>(n_objects);
   std::vector<std::int32_t> acc((1 + K) * S);  // per call (a chunk of candidates), not per Gaussian
   std::int32_t* accV = acc.data();
@@ -150,7 +134,7 @@ inline void vote_range(const float* x, const float* y, const float* z, std::size
         const BI word_index = p.pix >> 5, shift = p.pix & BI(31);  // bit p is bit p % 32 of word p / 32
         for (std::size_t k = 0; k < K; ++k) {
           const auto* words = reinterpret_cast<const std::int32_t*>(bits + w.bits_offset + k * w.bytes_per_mask);
-          const BI f = (gather_words(words, word_index) >> shift) & p.vis;
+          const BI f = (simd::gather(words, word_index) >> shift) & p.vis;
           std::int32_t* af = accV + (1 + k) * S + (i0 - s0);
           (BI::load_unaligned(af) + f).store_unaligned(af);
         }

@@ -7,13 +7,12 @@
 #include <cmath>
 #include <cstdint>
 
-#include <xsimd/xsimd.hpp>
-
 #include "vcar/backends/cpu/tile_binning.hpp"
+#include "vcar/core/simd.hpp"
 
 namespace vcar::cpu {
 
-using Lane = xsimd::batch<float>;  // width follows the compiler flags (SSE2: 4, AVX2: 8, AVX-512: 16)
+using Lane = simd::batch<float>;  // width follows the compiler flags (SSE2, NEON, scalar: 4; AVX2: 8; AVX-512: 16)
 static_assert(tile_size % Lane::size == 0, "a tile row is a whole number of SIMD batches");
 
 inline constexpr float alpha_max = 0.999f;        // gsplat clamp
@@ -44,7 +43,7 @@ struct TileState {
     }
     live = 0;
     for (int p = 0; p < P; p += static_cast<int>(Lane::size))
-      if (xsimd::any(Lane::load_aligned(active + p) > Lane(0.f))) live |= std::uint64_t{1} << (p / static_cast<int>(Lane::size));
+      if (simd::any(Lane::load_aligned(active + p) > Lane(0.f))) live |= std::uint64_t{1} << (p / static_cast<int>(Lane::size));
   }
   bool all_done() const { return live == 0; }
 };
@@ -136,20 +135,20 @@ void composite_tile(PackedSplat* splat, const std::uint32_t* ids, std::int64_t c
         const auto live = act > zero;
         const Lane dx = lmx - Lane::load_aligned(lane_x + b * L);
         const Lane sigma = half_ca * dx * dx + cbdy * dx + ydy;
-        if (!xsimd::any(live && (sigma <= lane_sig_max))) continue;  // alpha < 1/255: no exp
-        const Lane alpha = xsimd::min(amax, op * xsimd::exp(-sigma));
+        if (!simd::any(live && (sigma <= lane_sig_max))) continue;  // alpha < 1/255: no exp
+        const Lane alpha = simd::min(amax, op * simd::exp(-sigma));
         const auto ok = live && (sigma >= zero) && (alpha >= askip);
-        if (!xsimd::any(ok)) continue;
+        if (!simd::any(ok)) continue;
         const Lane T = Lane::load_aligned(st.T + p);
         const Lane nT = T * (one - alpha);
         const auto stop = ok && (nT <= tstop);
         const auto take = ok && !stop;
-        const Lane w = xsimd::select(take, alpha * T, zero);
-        xsimd::select(take, nT, T).store_aligned(st.T + p);
-        if (xsimd::any(stop)) {
-          const Lane still = xsimd::select(stop, zero, act);
+        const Lane w = simd::select(take, alpha * T, zero);
+        simd::select(take, nT, T).store_aligned(st.T + p);
+        if (simd::any(stop)) {
+          const Lane still = simd::select(stop, zero, act);
           still.store_aligned(st.active + p);
-          if (!xsimd::any(still > zero)) {
+          if (!simd::any(still > zero)) {
             st.live &= ~(std::uint64_t{1} << bit);
             stopped = true;
           }
@@ -173,8 +172,8 @@ void composite_tile(PackedSplat* splat, const std::uint32_t* ids, std::int64_t c
       }
     }
     if constexpr (Contrib) {
-      entry_w[e] = xsimd::hadd(sw);
-      entry_wfg[e] = xsimd::hadd(swfg);
+      entry_w[e] = simd::reduce_add(sw);
+      entry_wfg[e] = simd::reduce_add(swfg);
     }
     if (stopped && st.all_done()) break;  // every pixel of the tile has saturated
   }

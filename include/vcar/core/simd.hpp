@@ -1,0 +1,215 @@
+#pragma once
+// The one place that knows the target's instruction set. Algorithms and the CPU backend write
+// their loops over vcar::simd::batch<float> / batch<std::int32_t> and the functions below; no
+// other header names an instruction set or tests an architecture macro.
+//
+// Two implementations, chosen at compile time:
+// - xsimd (x86-64 with SSE2 or better, AArch64 with NEON): batch<T> is xsimd::batch<T>, whose
+//   width follows the compiler's target flags (SSE2 and NEON: 4 floats, AVX2: 8, AVX-512: 16).
+// - scalar: batch<T> is four plain values with element-wise operators written as loops and no
+//   intrinsics. Chosen when VCAR_SIMD_SCALAR is defined (CMake: -DVCAR_SIMD=OFF, which also
+//   drops the xsimd dependency) or when the target is neither of the above (WebAssembly,
+//   RISC-V, 32-bit ARM): this is the path a WebAssembly build takes.
+// Both give the same selections; floats can differ in the last bits where the target fuses
+// multiply-adds or where xsimd's exp differs from std::exp (docs/embedding.md has the numbers).
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+#if !defined(VCAR_SIMD_SCALAR) && !(defined(__SSE2__) || defined(_M_X64) || defined(__aarch64__))
+#define VCAR_SIMD_SCALAR 1
+#endif
+
+#if !defined(VCAR_SIMD_SCALAR)
+// GCC 12's AVX-512 intrinsics read an "undefined" register on purpose and then warn about it
+// (-W(maybe-)uninitialized, GCC bug 105593, fixed in GCC 13) wherever they are inlined: the
+// warnings are silenced for xsimd and the wrappers below, so hosts building with -Wall see
+// none (when xsimd is first included through this header).
+#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ == 12 && defined(__AVX512F__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#define VCAR_SIMD_POP_DIAGNOSTICS 1
+#endif
+#include <xsimd/xsimd.hpp>
+#if defined(__AVX2__) || defined(__AVX512F__)
+#include <immintrin.h>  // the gathers below: xsimd 8.1 never selects its own AVX2 gather
+#endif
+#endif
+
+namespace vcar::simd {
+
+#if !defined(VCAR_SIMD_SCALAR)
+
+template <class T>
+using batch = xsimd::batch<T>;
+template <class T>
+using batch_bool = xsimd::batch_bool<T>;
+
+// Name of the instruction set in use ("sse2", "fma3+avx2", "avx512bw", "neon64", "scalar").
+inline const char* isa_name() { return xsimd::default_arch::name(); }
+
+template <class T>
+inline batch<T> fma(const batch<T>& a, const batch<T>& b, const batch<T>& c) { return xsimd::fma(a, b, c); }
+template <class T>
+inline batch<T> min(const batch<T>& a, const batch<T>& b) { return xsimd::min(a, b); }
+template <class T>
+inline batch<T> max(const batch<T>& a, const batch<T>& b) { return xsimd::max(a, b); }
+inline batch<float> exp(const batch<float>& a) { return xsimd::exp(a); }
+template <class T>
+inline batch<T> select(const batch_bool<T>& c, const batch<T>& a, const batch<T>& b) { return xsimd::select(c, a, b); }
+template <class T>
+inline bool any(const batch_bool<T>& c) { return xsimd::any(c); }
+inline batch<std::int32_t> to_int(const batch<float>& a) { return xsimd::to_int(a); }  // truncates
+template <class T>
+inline T reduce_add(const batch<T>& a) { return xsimd::hadd(a); }
+
+// words[idx] per lane.
+inline batch<std::int32_t> gather(const std::int32_t* words, const batch<std::int32_t>& idx) {
+  // A non-template function compiles both branches of an if constexpr: the preprocessor picks.
+#if defined(__AVX512F__)
+  static_assert(batch<std::int32_t>::size == 16);
+  return batch<std::int32_t>(_mm512_i32gather_epi32(idx, words, 4));
+#elif defined(__AVX2__)
+  static_assert(batch<std::int32_t>::size == 8);
+  return batch<std::int32_t>(_mm256_i32gather_epi32(words, idx, 4));
+#else
+  alignas(64) std::int32_t i[batch<std::int32_t>::size], out[batch<std::int32_t>::size];
+  idx.store_aligned(i);
+  for (std::size_t l = 0; l < batch<std::int32_t>::size; ++l) out[l] = words[i[l]];
+  return batch<std::int32_t>::load_aligned(out);
+#endif
+}
+
+#if defined(VCAR_SIMD_POP_DIAGNOSTICS)
+#pragma GCC diagnostic pop
+#undef VCAR_SIMD_POP_DIAGNOSTICS
+#endif
+
+#else  // scalar
+
+inline constexpr std::size_t scalar_width = 4;  // as SSE2 and NEON; the renderer needs >= 4
+
+template <class T>
+struct batch_bool {
+  static constexpr std::size_t size = scalar_width;
+  bool v[size] = {};
+  friend batch_bool operator&(const batch_bool& a, const batch_bool& b) { return zip(a, b, [](bool x, bool y) { return x && y; }); }
+  friend batch_bool operator|(const batch_bool& a, const batch_bool& b) { return zip(a, b, [](bool x, bool y) { return x || y; }); }
+  friend batch_bool operator&&(const batch_bool& a, const batch_bool& b) { return a & b; }
+  friend batch_bool operator||(const batch_bool& a, const batch_bool& b) { return a | b; }
+  friend batch_bool operator!(const batch_bool& a) {
+    batch_bool r;
+    for (std::size_t l = 0; l < size; ++l) r.v[l] = !a.v[l];
+    return r;
+  }
+
+private:
+  template <class F>
+  static batch_bool zip(const batch_bool& a, const batch_bool& b, F f) {
+    batch_bool r;
+    for (std::size_t l = 0; l < size; ++l) r.v[l] = f(a.v[l], b.v[l]);
+    return r;
+  }
+};
+
+template <class T>
+struct batch {
+  static constexpr std::size_t size = scalar_width;
+  T v[size] = {};
+
+  batch() = default;
+  batch(T x) {  // broadcast, implicit as xsimd's
+    for (auto& e : v) e = x;
+  }
+  static batch load_unaligned(const T* p) {
+    batch r;
+    for (std::size_t l = 0; l < size; ++l) r.v[l] = p[l];
+    return r;
+  }
+  static batch load_aligned(const T* p) { return load_unaligned(p); }
+  void store_unaligned(T* p) const {
+    for (std::size_t l = 0; l < size; ++l) p[l] = v[l];
+  }
+  void store_aligned(T* p) const { store_unaligned(p); }
+
+  template <class F>
+  static batch map(const batch& a, F f) {
+    batch r;
+    for (std::size_t l = 0; l < size; ++l) r.v[l] = f(a.v[l]);
+    return r;
+  }
+  template <class F>
+  static batch zip(const batch& a, const batch& b, F f) {
+    batch r;
+    for (std::size_t l = 0; l < size; ++l) r.v[l] = f(a.v[l], b.v[l]);
+    return r;
+  }
+  template <class F>
+  static batch_bool<T> test(const batch& a, const batch& b, F f) {
+    batch_bool<T> r;
+    for (std::size_t l = 0; l < size; ++l) r.v[l] = f(a.v[l], b.v[l]);
+    return r;
+  }
+
+  friend batch operator+(const batch& a, const batch& b) { return zip(a, b, [](T x, T y) { return T(x + y); }); }
+  friend batch operator-(const batch& a, const batch& b) { return zip(a, b, [](T x, T y) { return T(x - y); }); }
+  friend batch operator*(const batch& a, const batch& b) { return zip(a, b, [](T x, T y) { return T(x * y); }); }
+  friend batch operator/(const batch& a, const batch& b) { return zip(a, b, [](T x, T y) { return T(x / y); }); }
+  friend batch operator-(const batch& a) { return map(a, [](T x) { return T(-x); }); }
+  friend batch operator&(const batch& a, const batch& b) { return zip(a, b, [](T x, T y) { return T(x & y); }); }
+  friend batch operator>>(const batch& a, const batch& b) { return zip(a, b, [](T x, T y) { return T(x >> y); }); }
+  friend batch operator>>(const batch& a, int s) { return map(a, [s](T x) { return T(x >> s); }); }
+  batch& operator+=(const batch& b) { return *this = *this + b; }
+
+  friend batch_bool<T> operator<(const batch& a, const batch& b) { return test(a, b, [](T x, T y) { return x < y; }); }
+  friend batch_bool<T> operator<=(const batch& a, const batch& b) { return test(a, b, [](T x, T y) { return x <= y; }); }
+  friend batch_bool<T> operator>(const batch& a, const batch& b) { return test(a, b, [](T x, T y) { return x > y; }); }
+  friend batch_bool<T> operator>=(const batch& a, const batch& b) { return test(a, b, [](T x, T y) { return x >= y; }); }
+};
+
+inline const char* isa_name() { return "scalar"; }
+
+// Not fused: a * b + c rounded twice, as xsimd's fma on SSE2 (the compiler may still contract
+// it where the target has FMA and -ffp-contract allows).
+template <class T>
+inline batch<T> fma(const batch<T>& a, const batch<T>& b, const batch<T>& c) { return a * b + c; }
+// min/max pick b when either is NaN, as SSE's minps/maxps (and xsimd on them).
+template <class T>
+inline batch<T> min(const batch<T>& a, const batch<T>& b) { return batch<T>::zip(a, b, [](T x, T y) { return x < y ? x : y; }); }
+template <class T>
+inline batch<T> max(const batch<T>& a, const batch<T>& b) { return batch<T>::zip(a, b, [](T x, T y) { return x > y ? x : y; }); }
+inline batch<float> exp(const batch<float>& a) { return batch<float>::map(a, [](float x) { return std::exp(x); }); }
+template <class T>
+inline batch<T> select(const batch_bool<T>& c, const batch<T>& a, const batch<T>& b) {
+  batch<T> r;
+  for (std::size_t l = 0; l < scalar_width; ++l) r.v[l] = c.v[l] ? a.v[l] : b.v[l];
+  return r;
+}
+template <class T>
+inline bool any(const batch_bool<T>& c) {
+  for (bool b : c.v)
+    if (b) return true;
+  return false;
+}
+inline batch<std::int32_t> to_int(const batch<float>& a) {  // truncates
+  batch<std::int32_t> r;
+  for (std::size_t l = 0; l < scalar_width; ++l) r.v[l] = static_cast<std::int32_t>(a.v[l]);
+  return r;
+}
+template <class T>
+inline T reduce_add(const batch<T>& a) {  // pairwise, as the 4-lane SIMD horizontal adds
+  return (a.v[0] + a.v[2]) + (a.v[1] + a.v[3]);
+}
+inline batch<std::int32_t> gather(const std::int32_t* words, const batch<std::int32_t>& idx) {
+  batch<std::int32_t> r;
+  for (std::size_t l = 0; l < scalar_width; ++l) r.v[l] = words[idx.v[l]];
+  return r;
+}
+
+#endif
+
+// Lanes of a float batch on this target.
+inline constexpr std::size_t width = batch<float>::size;
+
+}  // namespace vcar::simd
