@@ -1,5 +1,6 @@
 # stb from Debian's libstb-dev: headers in <prefix>/include/stb, implementations in libstb.
-# Provides the imported target vcar::stb (used by the library and by its installed config).
+# Provides the imported target vcar::stb (used by vcar::io and by its installed config) when stb
+# is found; leaves it undefined otherwise (the caller decides whether that is an error).
 if(NOT TARGET vcar::stb)
   find_package(PkgConfig QUIET)
   if(PkgConfig_FOUND)
@@ -16,12 +17,11 @@ if(NOT TARGET vcar::stb)
   else()
     find_path(VCAR_STB_INCLUDE_DIR stb_image.h PATH_SUFFIXES stb)
     find_library(VCAR_STB_LIBRARY NAMES stb)
-    if(NOT VCAR_STB_INCLUDE_DIR OR NOT VCAR_STB_LIBRARY)
-      message(FATAL_ERROR "vcar: stb not found (Debian: apt-get install libstb-dev)")
+    if(VCAR_STB_INCLUDE_DIR AND VCAR_STB_LIBRARY)
+      add_library(vcar::stb INTERFACE IMPORTED GLOBAL)
+      set_target_properties(vcar::stb PROPERTIES
+        INTERFACE_INCLUDE_DIRECTORIES "${VCAR_STB_INCLUDE_DIR}"
+        INTERFACE_LINK_LIBRARIES "${VCAR_STB_LIBRARY}")
     endif()
-    add_library(vcar::stb INTERFACE IMPORTED GLOBAL)
-    set_target_properties(vcar::stb PROPERTIES
-      INTERFACE_INCLUDE_DIRECTORIES "${VCAR_STB_INCLUDE_DIR}"
-      INTERFACE_LINK_LIBRARIES "${VCAR_STB_LIBRARY}")
   endif()
 endif()

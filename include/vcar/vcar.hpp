@@ -1,6 +1,8 @@
 #pragma once
-// Umbrella header: every public header of vcar::vcar, nothing else. The peers' methods
-// (vcar/baselines/*.hpp) are not included: they need nanoflann and Boost (target vcar::baselines).
+// Umbrella header of vcar::vcar: core, concepts, algorithms and the CPU backend. Needs Eigen and
+// xsimd (or VCAR_SIMD_SCALAR) only: never nlohmann_json, stb or POSIX headers (tested by
+// tests/consumer). The other targets have their own: <vcar/io.hpp> (vcar::io),
+// <vcar/synth.hpp> (vcar::synth, with eval), <vcar/baselines.hpp> (vcar::baselines).
 #include "vcar/core/error.hpp"
 #include "vcar/core/rotation.hpp"
 #include "vcar/core/gaussian_scene.hpp"
@@ -11,6 +13,7 @@
 #include "vcar/core/parallel.hpp"
 #include "vcar/core/projection.hpp"
 #include "vcar/core/spherical_harmonics.hpp"
+#include "vcar/core/simd.hpp"
 
 #include "vcar/concepts/renderer.hpp"
 #include "vcar/concepts/segmenter.hpp"
@@ -25,25 +28,3 @@
 #include "vcar/algo/pipeline.hpp"
 
 #include "vcar/backends/cpu/tiled_renderer.hpp"
-
-#include "vcar/io/atomic_file.hpp"
-#include "vcar/io/ply.hpp"
-#include "vcar/io/colmap.hpp"
-#include "vcar/io/cameras_json.hpp"
-#include "vcar/io/transforms_json.hpp"
-#include "vcar/io/cameras.hpp"
-#include "vcar/io/image_file.hpp"
-#include "vcar/io/mask_folder_segmenter.hpp"
-#include "vcar/io/external_segmenter.hpp"
-
-#include "vcar/synth/world.hpp"
-#include "vcar/synth/rigs.hpp"
-#include "vcar/synth/ground_truth.hpp"
-#include "vcar/synth/oracle_segmenter.hpp"
-#include "vcar/synth/prompt.hpp"
-#include "vcar/synth/dataset.hpp"
-
-#include "vcar/eval/mask_metrics.hpp"
-#include "vcar/eval/boundary_metrics.hpp"
-#include "vcar/eval/selection_metrics.hpp"
-#include "vcar/eval/aggregate.hpp"

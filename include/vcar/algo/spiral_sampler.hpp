@@ -39,9 +39,11 @@ inline Eigen::Vector3f estimate_scene_up(std::span<const Camera> cameras) {
 inline Eigen::Matrix3f spiral_frame(const Eigen::Vector3f& up, SpiralVariant variant = SpiralVariant::Paper) {
   if (variant == SpiralVariant::ReferenceCode) return Eigen::Matrix3f::Identity();
   const Eigen::Vector3f e3 = up.normalized();
-  int axis = 0;  // world axis least aligned with up
+  // World axis least aligned with up; ties (within 1e-4, so that the last-bit differences
+  // between instruction sets, e.g. fused or not, cannot flip the choice) go to x, then y.
+  int axis = 0;
   for (int a = 1; a < 3; ++a)
-    if (std::abs(e3[a]) < std::abs(e3[axis])) axis = a;
+    if (std::abs(e3[a]) < std::abs(e3[axis]) - 1e-4f) axis = a;
   const Eigen::Vector3f a = Eigen::Vector3f::Unit(axis);
   const Eigen::Vector3f e1 = (a - a.dot(e3) * e3).normalized();
   Eigen::Matrix3f F;

@@ -1,0 +1,1 @@
+#error "a consumer of vcar::vcar alone reached stb_image_write.h: <vcar/vcar.hpp> must not need it"
