@@ -3,7 +3,7 @@
 // forward pass (rasterize_forward_tensor_cpu): one thread, no tiles, no SIMD. Project every
 // Gaussian and take its SH colour first, sort by depth, then for each Gaussian front to back
 // loop over its 3-sigma box (3 sqrt(Sigma2D_xx), 3 sqrt(Sigma2D_yy), +2 px, clipped), skipping
-// pixels already done. Compositing rules are CONVENTIONS 3 (pixel centres at +0.5), so its
+// pixels already done. Compositing rules are conventions §3 (pixel centres at +0.5), so its
 // output equals the tiled renderer's except where the 3-sigma box is smaller than the
 // opacity-aware extent (opaque splats lose their 3.0-3.33 sigma fringe, alpha < 0.012).
 #include <algorithm>

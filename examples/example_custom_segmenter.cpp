@@ -68,7 +68,7 @@ int main() try {
   auto streaming = vcar::make_streaming_segmenter(
       [&](const vcar::FrameSequence& f, const vcar::Prompt& prompt, const vcar::MaskSink& sink) {
         for (std::size_t k = 0; k < f.size(); ++k) {
-          // Frame 0 is the prompt view (CONVENTIONS 4); a video model would start its memory here.
+          // Frame 0 is the prompt view (conventions §4); a video model would start its memory here.
           const vcar::ImageRGB8 rgb = f.image(k);  // rendered on demand, with the background of params
           ++images;
           std::size_t lit = 0;

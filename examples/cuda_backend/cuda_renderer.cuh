@@ -1,6 +1,6 @@
 #pragma once
 // vcar::cuda::Renderer: a CUDA splatter that satisfies vcar::Renderer and
-// vcar::ContributionRenderer (concepts/renderer.hpp), following gsplat's rules (CONVENTIONS 3)
+// vcar::ContributionRenderer (concepts/renderer.hpp), following gsplat's rules (conventions §3)
 // like the CPU backend. This header is host code: it gathers the drawn Gaussians (the request's
 // subset, with its log-scale override) and hands them to the kernels in splat_kernels.cu through
 // the plain interface of splat_kernels.h, so it compiles with the host compiler (C++20) and the

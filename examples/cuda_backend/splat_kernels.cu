@@ -1,4 +1,4 @@
-// CUDA kernels of the example backend: gsplat's forward pass with vcar's rules (CONVENTIONS 3).
+// CUDA kernels of the example backend: gsplat's forward pass with vcar's rules (conventions §3).
 //   project   one thread per drawn Gaussian: B.6-B.7 projection, cull, extent, SH colour
 //   duplicate one (tile, depth) key per touched tile, offsets from an exclusive scan
 //   sort      cub radix sort of the 64-bit keys (stable: equal depths keep the drawn order)
@@ -188,7 +188,7 @@ __global__ void ranges_kernel(std::size_t m, const std::uint64_t* __restrict__ k
   if (e + 1 == m || (keys[e + 1] >> 32) != tile) ranges[2 * tile + 1] = e + 1;
 }
 
-// One block per tile, one thread per pixel, front to back (CONVENTIONS 3): sigma = 1/2 d^T
+// One block per tile, one thread per pixel, front to back (conventions §3): sigma = 1/2 d^T
 // Sigma2D^-1 d with d = m - p, alpha = min(0.999, o exp(-sigma)), skip alpha < 1/255, stop
 // before the splat whose next transmittance would be <= 1e-4. Contrib: per entry, the block's
 // sum of alpha T (and alpha T fg), reduced warp by warp in a fixed order.

@@ -9,7 +9,7 @@
 
 namespace vcar::cuda::detail {
 
-// A pinhole camera (CONVENTIONS 2), world-to-camera rotation row-major.
+// A pinhole camera (conventions §2), world-to-camera rotation row-major.
 struct CameraParams {
   int width = 0, height = 0;
   float fx = 0, fy = 0, cx = 0, cy = 0;
@@ -18,7 +18,7 @@ struct CameraParams {
   float eye[3] = {0, 0, 0};                  // camera centre in world (SH view direction)
 };
 
-// gsplat's projection constants (vcar::ProjectionParams, CONVENTIONS 3).
+// gsplat's projection constants (vcar::ProjectionParams, conventions §3).
 struct ProjectionConstants {
   float near_plane = 0.01f, far_plane = 1e10f, eps2d = 0.3f, frustum_margin = 0.3f;
   float alpha_min = 1.f / 255.f, extend_max = 3.33f;

@@ -1,4 +1,4 @@
-// `vcar eval`: a selection against a synthetic dataset's ground truth (CONVENTIONS 6).
+// `vcar eval`: a selection against a synthetic dataset's ground truth (conventions §6).
 #include <cstdio>
 #include <filesystem>
 #include <iostream>

@@ -1,5 +1,5 @@
 #pragma once
-// The evaluation protocol of CONVENTIONS 6, shared by `vcar eval` and `vcar demo`: render the
+// The evaluation protocol of conventions §6, shared by `vcar eval` and `vcar demo`: render the
 // selection (refined scales) from each held-out view, threshold alpha, compare with the GT mask;
 // score the selected ids against the true ids.
 #include <functional>

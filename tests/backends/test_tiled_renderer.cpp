@@ -19,7 +19,7 @@ namespace {
 using vcar::Index;
 
 // Brute force: every pixel against every drawn Gaussian, no tiles, double precision, the
-// compositing rules of CONVENTIONS 3. Projections come from vcar::project_gaussian (tested
+// compositing rules of conventions §3. Projections come from vcar::project_gaussian (tested
 // on its own in tests/core/test_projection.cpp).
 struct BruteForce {
   std::vector<double> rgb, alpha, depth;  // W*H*3, W*H, W*H

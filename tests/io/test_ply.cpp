@@ -68,7 +68,7 @@ TEST_CASE("train-1000.ply: counts, SH degree 3, normals kept, values at known of
     for (int d = 0; d < 3; ++d) CHECK(s.mean[d][i] == raw_float(raw, P, i, d));
     for (int e = 0; e < 3; ++e) CHECK(s.extra[i * 3 + e] == raw_float(raw, P, i, 3 + e));
     for (int c = 0; c < 3; ++c) CHECK(s.sh[i * 16 * 3 + c] == raw_float(raw, P, i, 6 + c));
-    // f_rest_j is coefficient j % 15 + 1 of channel j / 15 (channel-major, CONVENTIONS 1).
+    // f_rest_j is coefficient j % 15 + 1 of channel j / 15 (channel-major, conventions §1).
     for (std::size_t j = 0; j < 45; ++j)
       CHECK(s.sh[(i * 16 + j % 15 + 1) * 3 + j / 15] == raw_float(raw, P, i, 9 + j));
     CHECK(s.opacity_logit[i] == raw_float(raw, P, i, 54));

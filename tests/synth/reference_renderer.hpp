@@ -1,5 +1,5 @@
 #pragma once
-// A tiny, slow, test-local Renderer (CONVENTIONS 3 compositing, global depth order instead of
+// A tiny, slow, test-local Renderer (conventions §3 compositing, global depth order instead of
 // tiles) so the synth tests do not depend on the CPU backend.
 #include <algorithm>
 #include <numeric>

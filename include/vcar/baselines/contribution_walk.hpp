@@ -1,6 +1,6 @@
 #pragma once
 // A reference front-to-back walk over the contributions alpha_i(p) T_i(p) of one view, with
-// gsplat's rules (CONVENTIONS 3: projection, 16 x 16 tiles, depth order, alpha clamp 0.999,
+// gsplat's rules (conventions §3: projection, 16 x 16 tiles, depth order, alpha clamp 0.999,
 // skip below 1/255, stop before T would drop to 1e-4). It is the "brute-force/tiled logic" the
 // peer methods need where a renderer does not expose it: LBG's per-pixel maximum contributor,
 // and test-local ContributionRenderers.

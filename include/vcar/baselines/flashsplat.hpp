@@ -1,5 +1,5 @@
 #pragma once
-// FlashSplat (Shen et al. 2024), binary case (CONVENTIONS 8):
+// FlashSplat (Shen et al. 2024), binary case (conventions §8):
 //   A[1][i] = sum over masked views and foreground pixels of alpha_i T_i,
 //   A[0][i] = the same over background pixels;
 // each Gaussian's column (A[0][i], A[1][i]) is L2-normalised, the background bias gamma is added

@@ -1,5 +1,5 @@
 #pragma once
-// GaussianCut (Jain et al. 2024), training-free part (CONVENTIONS 8).
+// GaussianCut (Jain et al. 2024), training-free part (conventions §8).
 //
 // Coarse: w_i = sum alpha T m / sum alpha T over every masked view; coarse foreground when
 // w_i >= tau_w (0.9; 0.3 for 360-degree scenes). Gaussians with no contribution at all get w = 0

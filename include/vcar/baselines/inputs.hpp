@@ -1,5 +1,5 @@
 #pragma once
-// What every peer method (CONVENTIONS 8) consumes and returns. The masks are the same per-view
+// What every peer method (conventions §8) consumes and returns. The masks are the same per-view
 // masks VCAR votes with, handed over on demand so a method never needs all of them at once.
 #include <algorithm>
 #include <cstddef>
@@ -19,7 +19,7 @@
 
 namespace vcar::baselines {
 
-// mask(j): the mask of view j, or nullptr for "no mask" (no evidence, CONVENTIONS 4). The
+// mask(j): the mask of view j, or nullptr for "no mask" (no evidence, conventions §4). The
 // pointer must stay valid until the next call. Masks collected from a Segmenter with
 // vcar::segment_all plug in through masks_from.
 using MaskProvider = std::function<const Mask*(std::size_t view)>;
@@ -69,7 +69,7 @@ inline int point_label(const Camera& cam, const Mask* mask, const Eigen::Vector3
   return mask_at(*mask, u, v) ? 1 : 0;  // Eq. 2
 }
 
-// Degree-0 colour of Gaussian i, rgb = max(0, 0.5 + C0 f_dc) (CONVENTIONS 3).
+// Degree-0 colour of Gaussian i, rgb = max(0, 0.5 + C0 f_dc) (conventions §3).
 inline Eigen::Vector3f dc_colour(const GaussianScene& s, std::size_t i) {
   constexpr float C0 = 0.28209479177387814f;
   const std::size_t base = i * static_cast<std::size_t>(s.sh_coeffs()) * 3;

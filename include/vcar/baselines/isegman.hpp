@@ -1,5 +1,5 @@
 #pragma once
-// iSegMan-style visibility-guided voting weighted by opacity (CONVENTIONS 8; the exact weights
+// iSegMan-style visibility-guided voting weighted by opacity (conventions §8; the exact weights
 // are not published in text we could read, these are ours):
 //   w_ij = alpha_i(c) T_i(c), the composited weight of Gaussian i at the pixel c containing its
 //          own projected centre in view j (opacity x Gaussian falloff x transmittance of what is

@@ -1,5 +1,5 @@
 #pragma once
-// LBG (Chacko et al. 2025), lifting by maximum contributor (CONVENTIONS 8): in every view with
+// LBG (Chacko et al. 2025), lifting by maximum contributor (conventions §8): in every view with
 // a mask, each pixel votes for its maximum contributor argmax_i alpha_i T_i (pixels where
 // nothing is composited vote for nobody); a Gaussian is foreground when a strict majority of the
 // pixels that chose it are foreground. score_i = foreground votes / votes (0 without votes).

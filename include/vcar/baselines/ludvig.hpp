@@ -1,5 +1,5 @@
 #pragma once
-// LUDVIG (Marrie et al. 2025), mask lifting plus graph diffusion (CONVENTIONS 8).
+// LUDVIG (Marrie et al. 2025), mask lifting plus graph diffusion (conventions §8).
 //   f0_i = sum alpha T m / (sum alpha T + 1e-8) over every masked view (uplifting);
 //   diffusion over a kNN graph (nanoflann, k = 16) of the contributing Gaussians' means with
 //   row-normalised similarities P (knn_graph.hpp: distance and colour kernels), anchored to the

@@ -1,5 +1,5 @@
 #pragma once
-// Naive centre voting (CONVENTIONS 8): in every view with a mask, a Gaussian votes foreground
+// Naive centre voting (conventions §8): in every view with a mask, a Gaussian votes foreground
 // when its projected centre falls in the mask; invisible (behind, outside the image) counts as
 // background. score_i = foreground votes / views with a mask; kept when score_i >= tau.
 // Views without a mask are no evidence for anyone and do not count.

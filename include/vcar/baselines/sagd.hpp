@@ -1,5 +1,5 @@
 #pragma once
-// SAGD (Hu et al. 2024) as specified in CONVENTIONS 8.
+// SAGD (Hu et al. 2024) as specified in conventions §8.
 //
 // Selection: in every view the centre gets the label of Eq. 2 (-1 invisible or no mask, 0
 // background, 1 foreground); the mode over ALL views (-1 included) must be 1 and its share of the

@@ -1,5 +1,5 @@
 #pragma once
-// Per-Gaussian sums over every view with a mask (CONVENTIONS 8):
+// Per-Gaussian sums over every view with a mask (conventions §8):
 //   weight[i] = sum_views sum_p alpha_i T_i,  weight_fg[i] = the same over foreground pixels.
 // Views without a mask add nothing (no evidence).
 #include <cstddef>

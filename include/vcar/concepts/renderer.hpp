@@ -2,7 +2,7 @@
 // The Renderer concept: how vcar asks a host application for images of a scene.
 //
 // A Renderer turns a RenderRequest into a RenderOutput:
-//  - `scene`: the Gaussians (CONVENTIONS 1); `camera`: the view (CONVENTIONS 2).
+//  - `scene`: the Gaussians (conventions §1); `camera`: the view (conventions §2).
 //  - `subset`: when non-null, only these Gaussians are drawn (the others do not exist for this
 //    render); null draws the whole scene. Indices are into `scene` and may come in any order.
 //  - `log_scale`: when non-null, replaces the log-scales of the drawn Gaussians; column d has
@@ -13,13 +13,13 @@
 // The output images are width x height of the camera: `rgb` has 3 float channels, `alpha`
 // (1 - final transmittance) and `depth` 1 each; `depth` stays empty unless asked for.
 // The Renderer owns nothing that outlives the call; it may keep scratch buffers between calls.
-// Rendering rules (tiles, culling, compositing) should match gsplat (CONVENTIONS 3) so that
+// Rendering rules (tiles, culling, compositing) should match gsplat (conventions §3) so that
 // masks of the rendered images line up with the projections the algorithms compute.
 //
 // A ContributionRenderer also accumulates, per Gaussian, over the pixels of one view:
 //   weight[i]    += sum_p alpha_i(p) T_i(p)
 //   weight_fg[i] += sum_p alpha_i(p) T_i(p) [mask(p) != 0]
-// into vectors sized like the scene (the peers' methods, CONVENTIONS 8, need these sums).
+// into vectors sized like the scene (the peers' methods, conventions §8, need these sums).
 //
 // Models: vcar::cpu::TiledRenderer (backends/cpu), or any host lambda through make_renderer:
 //

@@ -4,7 +4,7 @@
 //
 // `s.segment(frames, prompt, sink)` is called once per segmentation round:
 //  - `frames.cameras[k]` is the camera of frame k; frame 0 is always the reference view on
-//    which the prompt was given (CONVENTIONS 4), so video-mode segmenters can propagate.
+//    which the prompt was given (conventions §4), so video-mode segmenters can propagate.
 //  - `frames.image(k)` renders frame k on demand as 8-bit RGB (width x height x 3). It renders
 //    on every call: a segmenter that needs pixels calls it once per frame; one that does not
 //    (an oracle, a mask folder) never pays for rendering.

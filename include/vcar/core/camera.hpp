@@ -1,5 +1,5 @@
 #pragma once
-// Pinhole camera in the OpenCV/COLMAP frame: x right, y down, z forward (CONVENTIONS 2).
+// Pinhole camera in the OpenCV/COLMAP frame: x right, y down, z forward (conventions §2).
 // World-to-camera W = [R_w | t_w]; pixel (col j, row i) covers [j, j+1) x [i, i+1).
 #include <cmath>
 #include <string>
@@ -75,7 +75,7 @@ struct Camera {
   }
 };
 
-// Pixel of a continuous point, CONVENTIONS 2: floor, and inside test 0 <= u < W, 0 <= v < H.
+// Pixel of a continuous point, conventions §2: floor, and inside test 0 <= u < W, 0 <= v < H.
 inline bool inside_image(float u, float v, int width, int height) {
   return u >= 0.f && v >= 0.f && u < static_cast<float>(width) && v < static_cast<float>(height);
 }

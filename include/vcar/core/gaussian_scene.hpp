@@ -1,5 +1,5 @@
 #pragma once
-// The 3DGS scene as structure-of-arrays (CONVENTIONS 1). Algorithms read only the columns they
+// The 3DGS scene as structure-of-arrays (conventions §1). Algorithms read only the columns they
 // need: voting reads `mean`, ABR reads `mean`, `log_scale` and `rotation`, rendering reads all.
 #include <array>
 #include <cmath>

@@ -1,6 +1,6 @@
 #pragma once
 // Images and masks: row-major, interleaved channels. A Mask is W x H, 8-bit, nonzero =
-// foreground (CONVENTIONS 4).
+// foreground (conventions §4).
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -47,7 +47,7 @@ inline Image<std::uint8_t> to_8bit(const ImageF& img) {
   return out;
 }
 
-// Predicted mask of a rendering: alpha > threshold (CONVENTIONS 6).
+// Predicted mask of a rendering: alpha > threshold (conventions §6).
 inline Mask threshold(const ImageF& alpha, float a) {
   Mask m(alpha.width, alpha.height, 1);
   for (std::size_t k = 0; k < m.data.size(); ++k) m.data[k] = alpha.data[k] > a ? 255 : 0;

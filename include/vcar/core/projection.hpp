@@ -1,6 +1,6 @@
 #pragma once
 // Covariance projection of one Gaussian into one camera (B.6-B.7), with gsplat's near plane,
-// Jacobian clamp, low-pass eps2d and opacity-aware extent (CONVENTIONS 3).
+// Jacobian clamp, low-pass eps2d and opacity-aware extent (conventions §3).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -22,7 +22,7 @@ struct ProjectionParams {
 
 struct ProjectedGaussian {
   bool valid = false;            // false: behind the near plane, degenerate or transparent
-  Eigen::Vector2f mean{0, 0};    // m = (u, v) in pixels (continuous, CONVENTIONS 2)
+  Eigen::Vector2f mean{0, 0};    // m = (u, v) in pixels (continuous, conventions §2)
   float depth = 0;               // camera-space z
   Eigen::Matrix2f Sigma2D = Eigen::Matrix2f::Zero();  // sum_d s_d^2 q_d q_d^T + eps2d I
   Eigen::Vector3f conic{0, 0, 0};  // Sigma2D^-1 as (xx, xy, yy)

@@ -5,7 +5,7 @@
 
 namespace vcar {
 
-// Column d of the result is the local axis r_d of the Gaussian (CONVENTIONS 1).
+// Column d of the result is the local axis r_d of the Gaussian (conventions §1).
 // A zero quaternion is invalid input; it is rejected where scenes enter (GaussianScene::validate).
 inline Eigen::Matrix3f rotation_from_quaternion(float w, float x, float y, float z) {
   const float n = std::sqrt(w * w + x * x + y * y + z * z);

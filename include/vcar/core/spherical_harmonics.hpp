@@ -1,5 +1,5 @@
 #pragma once
-// View-dependent colour from spherical harmonics of degree 0-3 (CONVENTIONS 3): the real SH
+// View-dependent colour from spherical harmonics of degree 0-3 (conventions §3): the real SH
 // basis, ordering and signs of the reference 3DGS code (Condon-Shortley phase, m = -l..l),
 // view direction = normalised (mean - camera centre), rgb = max(0, 0.5 + SH).
 #include <algorithm>

@@ -1,5 +1,5 @@
 #pragma once
-// One (object, view) evaluation with every metric of CONVENTIONS 6, and the two levels of
+// One (object, view) evaluation with every metric of conventions §6, and the two levels of
 // aggregation: mean over the views of a scene, then mean over scenes (both are reported).
 #include <cstddef>
 #include <span>
@@ -25,7 +25,7 @@ inline ViewMetrics evaluate_mask(const Mask& pred, const Mask& gt, int d = 0, co
           vcar::eval::boundary_f1(pred, gt, d, where).f1, vcar::eval::trimap_iou(pred, gt, d, where)};
 }
 
-// The rendered alpha of the selection thresholded at a (CONVENTIONS 6), then evaluate_mask.
+// The rendered alpha of the selection thresholded at a (conventions §6), then evaluate_mask.
 inline ViewMetrics evaluate_alpha(const ImageF& alpha, const Mask& gt, float a = alpha_default, int d = 0,
                                   const std::string& where = "view") {
   return evaluate_mask(predicted_mask(alpha, a), gt, d, where);

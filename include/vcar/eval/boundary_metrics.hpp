@@ -1,5 +1,5 @@
 #pragma once
-// Boundary metrics of a predicted mask against a ground-truth mask (CONVENTIONS 6), all with one
+// Boundary metrics of a predicted mask against a ground-truth mask (conventions §6), all with one
 // band width d (pixels), by default d = max(1, round(0.02 * image diagonal)):
 //
 //  - Boundary IoU (Cheng et al. 2021, their reference `mask_to_boundary`): the band of a mask is
@@ -29,7 +29,7 @@
 
 namespace vcar::eval {
 
-// d = max(1, round(ratio * sqrt(W^2 + H^2))), ratio 0.02 (CONVENTIONS 6).
+// d = max(1, round(ratio * sqrt(W^2 + H^2))), ratio 0.02 (conventions §6).
 inline int band_width(int width, int height, double ratio = 0.02) {
   const double diag = std::sqrt(double(width) * width + double(height) * height);
   return std::max(1, static_cast<int>(std::lround(ratio * diag)));

@@ -1,5 +1,5 @@
 #pragma once
-// Per (object, view) region metrics (CONVENTIONS 6): IoU and pixel accuracy of a predicted mask
+// Per (object, view) region metrics (conventions §6): IoU and pixel accuracy of a predicted mask
 // against a ground-truth mask, and the predicted mask of a rendering (alpha > a).
 #include <cstddef>
 #include <string>
@@ -11,7 +11,7 @@
 namespace vcar::eval {
 
 // Alpha thresholds reported by the benchmarks: 0.5 (our default) and 0.1 (the paper's released
-// evaluation), CONVENTIONS 6.
+// evaluation), conventions §6.
 inline constexpr float alpha_default = 0.5f;
 inline constexpr float alpha_released = 0.1f;
 

@@ -1,7 +1,7 @@
 #pragma once
 // Inria 3DGS `cameras.json`: an array of {id, img_name, width, height, position[3],
 // rotation[3][3], fx, fy}. `rotation` lists the rows of the camera-to-world rotation and
-// `position` is the camera centre, so R_w = rotation^T and t_w = -R_w position (CONVENTIONS 2).
+// `position` is the camera centre, so R_w = rotation^T and t_w = -R_w position (conventions §2).
 // The principal point is the image centre, unless the entry has `cx` / `cy` (a vcar extension,
 // written only when the principal point is off-centre, so Inria files stay Inria files).
 // Cameras keep the file's order.

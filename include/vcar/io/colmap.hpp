@@ -1,5 +1,5 @@
 #pragma once
-// COLMAP sparse models (cameras + images, .bin or .txt) to vcar cameras (CONVENTIONS 2).
+// COLMAP sparse models (cameras + images, .bin or .txt) to vcar cameras (conventions §2).
 //
 // COLMAP stores per image the world-to-camera pose (qw qx qy qz, tx ty tz) in the OpenCV frame,
 // and pixel centres at +0.5, exactly our convention: R_w = rot(q / |q|), t_w = t, cx and cy as

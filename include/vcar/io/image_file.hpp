@@ -1,7 +1,7 @@
 #pragma once
 // Image and mask files through stb (PNG, JPEG and whatever else stb_image decodes).
 //
-// Masks (CONVENTIONS 4): the result is one 8-bit channel, 255 = foreground, 0 = background.
+// Masks (conventions §4): the result is one 8-bit channel, 255 = foreground, 0 = background.
 // - 8-bit grey: nonzero is foreground; 16-bit PNG (read with stbi_load_16): nonzero likewise.
 // - colour masks, including paletted PNG (stb expands the palette to RGB(A)): a pixel is
 //   foreground when it is not black, i.e. any colour channel is nonzero. Alpha is ignored,

@@ -2,7 +2,7 @@
 // MaskFolderSegmenter: a Segmenter (concepts/segmenter.hpp) that answers frame k with the mask
 // file of a folder whose stem matches the stem of cameras[k].name ("IMG_01.jpg" -> IMG_01.png),
 // .png preferred over .jpg / .jpeg; a frame without a file gets "no mask" (no evidence,
-// CONVENTIONS 4). The prompt is ignored: the masks already are the answer. Masks are read one at
+// conventions §4). The prompt is ignored: the masks already are the answer. Masks are read one at
 // a time and streamed to the sink; a mask of the wrong size is an error naming the file.
 #include <algorithm>
 #include <cctype>

@@ -1,5 +1,5 @@
 #pragma once
-// Inria 3DGS PLY files (CONVENTIONS 1): binary little-endian or ASCII, SH degree 0-3.
+// Inria 3DGS PLY files (conventions §1): binary little-endian or ASCII, SH degree 0-3.
 //
 // Reading matches properties by NAME, in any order, of any numeric type (char .. double; values
 // are converted to float). Required: x y z, f_dc_0..2, opacity, scale_0..2, rot_0..3; the SH
@@ -243,7 +243,7 @@ inline void write_ply_stream(std::ostream& out, const GaussianScene& scene,
     for (int d = 0; d < 3; ++d) row[p++] = scene.mean[d][i];
     for (std::size_t e : normals) row[p++] = scene.extra[i * E + e];
     for (int c = 0; c < 3; ++c) row[p++] = scene.sh[(i * B) * 3 + c];
-    for (int c = 0; c < 3; ++c)  // channel-major f_rest (CONVENTIONS 1)
+    for (int c = 0; c < 3; ++c)  // channel-major f_rest (conventions §1)
       for (std::size_t k = 1; k < B; ++k) row[p++] = scene.sh[(i * B + k) * 3 + c];
     row[p++] = scene.opacity_logit[i];
     for (int d = 0; d < 3; ++d) row[p++] = log_scale ? (*log_scale)[d][r] : scene.log_scale[d][i];

@@ -1,6 +1,6 @@
 #pragma once
 // Exact 2D ground truth by ray casting the analytic primitives through pixel centres
-// (j + 0.5, i + 0.5) (CONVENTIONS 2). The visible mask of an object is where it is the nearest
+// (j + 0.5, i + 0.5) (conventions §2). The visible mask of an object is where it is the nearest
 // surface (occlusion included: what a segmenter sees in a render of the full scene); its
 // silhouette is where a ray meets it at all (the object alone: what a selection rendered alone
 // is compared to). Objects made of inserted trained Gaussians have no analytic surface: their

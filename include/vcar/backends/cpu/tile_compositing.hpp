@@ -1,5 +1,5 @@
 #pragma once
-// Front-to-back compositing of one 16 x 16 tile, SIMD over the pixels of a row (CONVENTIONS 3):
+// Front-to-back compositing of one 16 x 16 tile, SIMD over the pixels of a row (conventions §3):
 // alpha = min(0.999, opacity exp(-sigma)), skip alpha < 1/255, stop before the Gaussian whose
 // next transmittance T (1 - alpha) would be <= 1e-4 (gsplat does not composite that one).
 #include <algorithm>
@@ -95,7 +95,7 @@ void composite_tile(PackedSplat* splat, const std::uint32_t* ids, std::int64_t c
     for (int r = 0; r < tile_size; ++r) m |= std::uint64_t{1} << (r * NB);
     return m;
   }();
-  alignas(64) float lane_x[tile_size];  // pixel-centre x of each column (CONVENTIONS 2)
+  alignas(64) float lane_x[tile_size];  // pixel-centre x of each column (conventions §2)
   for (int c = 0; c < tile_size; ++c) lane_x[c] = static_cast<float>(x0 + c) + 0.5f;
   const Lane zero(0.f), one(1.f), amax(alpha_max), askip(alpha_skip), tstop(T_stop);
 

@@ -1,5 +1,5 @@
 #pragma once
-// vcar::cpu::TiledRenderer: the CPU reference splatter, gsplat-equivalent (CONVENTIONS 3).
+// vcar::cpu::TiledRenderer: the CPU reference splatter, gsplat-equivalent (conventions §3).
 // Steps: project every drawn Gaussian (core/projection.hpp, B.6-B.7), cull, bin into 16 x 16
 // tiles in camera-depth order (ties by drawn index), composite each tile front to back,
 // multi-threaded over tiles and SIMD over the pixels of a tile. Results are bit-identical for
@@ -23,7 +23,7 @@
 namespace vcar::cpu {
 
 struct TiledRendererOptions {
-  ProjectionParams projection{};  // near plane, eps2d, Jacobian clamp, extent (CONVENTIONS 3)
+  ProjectionParams projection{};  // near plane, eps2d, Jacobian clamp, extent (conventions §3)
   int num_threads = 0;            // 0: the current vcar::max_threads()
 };
 
