@@ -1,0 +1,81 @@
+// The SIMD helper gives the same lane-wise results as plain scalar code on every target
+// (SSE2, AVX2, AVX-512, NEON, and the scalar path itself); CI runs this in every architecture stage.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "vcar/core/simd.hpp"
+
+namespace simd = vcar::simd;
+using BF = simd::batch<float>;
+using BI = simd::batch<std::int32_t>;
+constexpr std::size_t L = simd::width;
+
+TEST_CASE("simd: width is a power of two >= 4 and the same for float and int32", "[simd]") {
+  CHECK(L >= 4);
+  CHECK((L & (L - 1)) == 0);
+  CHECK(BI::size == L);
+  CHECK(std::string(simd::isa_name()).size() > 0);
+}
+
+TEST_CASE("simd: arithmetic, comparisons and select agree with scalar code lane by lane", "[simd]") {
+  alignas(64) float a[L], b[L], out[L];
+  for (std::size_t l = 0; l < L; ++l) {
+    a[l] = 0.75f * static_cast<float>(l) - 2.f;
+    b[l] = 1.5f - 0.25f * static_cast<float>(l * l);
+  }
+  const BF A = BF::load_aligned(a), B = BF::load_unaligned(b);
+  (A * B + BF(1.f)).store_aligned(out);
+  for (std::size_t l = 0; l < L; ++l) CHECK(out[l] == a[l] * b[l] + 1.f);
+  simd::max(A, B).store_aligned(out);
+  for (std::size_t l = 0; l < L; ++l) CHECK(out[l] == std::max(a[l], b[l]));
+  simd::min(A, B).store_aligned(out);
+  for (std::size_t l = 0; l < L; ++l) CHECK(out[l] == std::min(a[l], b[l]));
+  simd::select(A > B, A, -B).store_aligned(out);
+  for (std::size_t l = 0; l < L; ++l) CHECK(out[l] == (a[l] > b[l] ? a[l] : -b[l]));
+  // fma: fused or not, within one rounding of the exact value.
+  simd::fma(A, B, BF(0.1f)).store_aligned(out);
+  for (std::size_t l = 0; l < L; ++l) CHECK(out[l] == Approx(std::fma(a[l], b[l], 0.1f)).margin(1e-6));
+  CHECK(simd::any(A > BF(a[L - 1] - 0.5f)));   // only the last lane
+  CHECK(!simd::any(A > BF(a[L - 1])));
+  CHECK(simd::any((A >= BF(a[1])) && (A <= BF(a[1]))));
+}
+
+TEST_CASE("simd: exp within 2 ulp of std::exp over the renderer's range", "[simd]") {
+  alignas(64) float x[L], out[L];
+  for (float x0 = -20.f; x0 <= 0.f; x0 += 0.37f) {
+    for (std::size_t l = 0; l < L; ++l) x[l] = x0 + 0.01f * static_cast<float>(l);
+    simd::exp(BF::load_aligned(x)).store_aligned(out);
+    for (std::size_t l = 0; l < L; ++l) CHECK(out[l] == Approx(std::exp(x[l])).epsilon(2.5e-7));
+  }
+}
+
+TEST_CASE("simd: to_int truncates, reduce_add sums, gather reads words[idx]", "[simd]") {
+  alignas(64) float f[L];
+  alignas(64) std::int32_t idx[L], got[L];
+  for (std::size_t l = 0; l < L; ++l) f[l] = 0.5f + 1.25f * static_cast<float>(l);
+  simd::to_int(BF::load_aligned(f)).store_aligned(got);
+  float sum = 0.f;
+  for (std::size_t l = 0; l < L; ++l) {
+    CHECK(got[l] == static_cast<std::int32_t>(f[l]));
+    sum += f[l];
+  }
+  CHECK(simd::reduce_add(BF::load_aligned(f)) == Approx(sum).epsilon(1e-6));
+
+  std::vector<std::int32_t> words(100);
+  for (std::size_t k = 0; k < words.size(); ++k) words[k] = static_cast<std::int32_t>(k * k) - 1000;
+  for (std::size_t l = 0; l < L; ++l) idx[l] = static_cast<std::int32_t>((l * 37 + 11) % words.size());
+  simd::gather(words.data(), BI::load_aligned(idx)).store_aligned(got);
+  for (std::size_t l = 0; l < L; ++l) CHECK(got[l] == words[static_cast<std::size_t>(idx[l])]);
+  // The voting's bit lookup: (word >> (p & 31)) & 1 with shifts by a batch and by a constant.
+  const BI p = BI::load_aligned(idx) * BI(7);
+  ((simd::gather(words.data(), p >> 5) >> (p & BI(31))) & BI(1)).store_aligned(got);
+  for (std::size_t l = 0; l < L; ++l) {
+    const std::int32_t q = idx[l] * 7;
+    CHECK(got[l] == ((words[static_cast<std::size_t>(q >> 5)] >> (q & 31)) & 1));
+  }
+}
