@@ -13,6 +13,11 @@ if(VCAR_WITH_IO)                                      # vcar::io and vcar::synth
   if(NOT TARGET vcar::stb)
     message(FATAL_ERROR "vcar: stb not found (Debian: apt-get install libstb-dev), or configure with -DVCAR_WITH_IO=OFF")
   endif()
+  find_package(ZLIB REQUIRED)                         # zlib1g-dev: SPZ v2/v3 (gzip)
+  include(${CMAKE_CURRENT_LIST_DIR}/vcarZstd.cmake)   # libzstd-dev: SPZ v4
+  if(NOT TARGET vcar::zstd)
+    message(FATAL_ERROR "vcar: zstd not found (Debian: apt-get install libzstd-dev), or configure with -DVCAR_WITH_IO=OFF")
+  endif()
 endif()
 # Optional, for vcar::baselines only:
 find_package(nanoflann QUIET)                         # libnanoflann-dev

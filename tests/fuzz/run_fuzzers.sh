@@ -10,7 +10,7 @@ build="${1:?usage: run_fuzzers.sh <build dir> [seconds] [targets...]}"
 secs="${2:-180}"
 shift $(( $# >= 2 ? 2 : 1 ))
 targets=("$@")
-[ ${#targets[@]} -eq 0 ] && targets=(ply colmap_bin colmap_txt cameras_json transforms_json mask_png)
+[ ${#targets[@]} -eq 0 ] && targets=(ply colmap_bin colmap_txt cameras_json transforms_json mask_png splat spz compressed_ply)
 status=0
 for t in "${targets[@]}"; do
   exe="$build/tests/fuzz/fuzz_$t"

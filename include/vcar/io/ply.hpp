@@ -206,10 +206,12 @@ inline bool ply_is_standard_name(std::string_view s) {
          parse_index_suffix(s, "rot_", k);
 }
 
-// Writes the Gaussians `indices` (all when null) with optional replacement log-scales.
+// Writes the Gaussians `indices` (all when null) with optional replacement log-scales and an
+// optional last `uchar state` property (SuperSplat's flags, io/state_ply.hpp; it replaces an
+// extra named "state").
 inline void write_ply_stream(std::ostream& out, const GaussianScene& scene,
                              const std::vector<Index>* indices, const LogScales* log_scale,
-                             bool binary) {
+                             bool binary, const std::vector<std::uint8_t>* state = nullptr) {
   const std::size_t n = indices ? indices->size() : scene.size();
   const std::size_t B = static_cast<std::size_t>(scene.sh_coeffs()), E = scene.extra_names.size();
   // Column order: x y z, normals, f_dc, f_rest, opacity, scale, rot, other extras.
@@ -219,7 +221,8 @@ inline void write_ply_stream(std::ostream& out, const GaussianScene& scene,
       if (scene.extra_names[e] == nn) normals.push_back(e);
   if (normals.size() != 3) normals.clear();
   for (std::size_t e = 0; e < E; ++e)
-    if (std::find(normals.begin(), normals.end(), e) == normals.end()) others.push_back(e);
+    if (std::find(normals.begin(), normals.end(), e) == normals.end() && !(state && scene.extra_names[e] == "state"))
+      others.push_back(e);
 
   std::vector<std::string> names = {"x", "y", "z"};
   for (std::size_t e : normals) names.push_back(scene.extra_names[e]);
@@ -230,6 +233,7 @@ inline void write_ply_stream(std::ostream& out, const GaussianScene& scene,
   out << "ply\nformat " << (binary ? "binary_little_endian" : "ascii") << " 1.0\n"
       << "element vertex " << n << "\n";
   for (const auto& nm : names) out << "property float " << nm << "\n";
+  if (state) out << "property uchar state\n";
   out << "end_header\n";
 
   const std::size_t P = names.size();
@@ -255,13 +259,19 @@ inline void write_ply_stream(std::ostream& out, const GaussianScene& scene,
       std::memcpy(buf.data() + at, row.data(), P * 4);
       if constexpr (std::endian::native == std::endian::big)
         for (std::size_t q = 0; q < P; ++q) std::reverse(buf.data() + at + 4 * q, buf.data() + at + 4 * q + 4);
+      if (state) buf.push_back(static_cast<char>((*state)[i]));
     } else {
       char tmp[32];
       for (std::size_t q = 0; q < P; ++q) {
         // Shortest representation that reads back to the same float.
         const auto res = std::to_chars(tmp, tmp + sizeof tmp, row[q]);
         buf.insert(buf.end(), tmp, res.ptr);
-        buf.push_back(q + 1 < P ? ' ' : '\n');
+        buf.push_back(q + 1 < P || state ? ' ' : '\n');
+      }
+      if (state) {
+        const std::string v = std::to_string(static_cast<int>((*state)[i]));
+        buf.insert(buf.end(), v.begin(), v.end());
+        buf.push_back('\n');
       }
     }
     if ((r + 1) % rows_per_chunk == 0 || r + 1 == n) {

@@ -1,0 +1,23 @@
+# zstd (SPZ v4 streams, include/vcar/io/spz.hpp): Debian's libzstd-dev ships a CMake config
+# (zstd::libzstd_shared); elsewhere pkg-config libzstd. Provides the imported target vcar::zstd
+# (used by vcar::io and by its installed config). zlib comes from CMake's own FindZLIB.
+if(NOT TARGET vcar::zstd)
+  find_package(zstd CONFIG QUIET)
+  if(TARGET zstd::libzstd_shared OR TARGET zstd::libzstd_static)
+    add_library(vcar::zstd INTERFACE IMPORTED GLOBAL)
+    if(TARGET zstd::libzstd_shared)
+      set_property(TARGET vcar::zstd PROPERTY INTERFACE_LINK_LIBRARIES zstd::libzstd_shared)
+    else()
+      set_property(TARGET vcar::zstd PROPERTY INTERFACE_LINK_LIBRARIES zstd::libzstd_static)
+    endif()
+  else()
+    find_package(PkgConfig QUIET)
+    if(PkgConfig_FOUND)
+      pkg_check_modules(VCAR_ZSTD QUIET IMPORTED_TARGET libzstd)
+    endif()
+    if(TARGET PkgConfig::VCAR_ZSTD)
+      add_library(vcar::zstd INTERFACE IMPORTED GLOBAL)
+      set_property(TARGET vcar::zstd PROPERTY INTERFACE_LINK_LIBRARIES PkgConfig::VCAR_ZSTD)
+    endif()
+  endif()
+endif()

@@ -1,0 +1,87 @@
+#pragma once
+// One entry point for the scene files splat users exchange, chosen by CONTENT (the name only
+// decides for .splat, which has no signature): Inria PLY and PlayCanvas compressed PLY (first
+// line "ply"; compressed when the header has a `chunk` element and packed_* vertex properties),
+// Niantic SPZ (gzip magic 1f 8b, or the NGSP magic of v4) and antimatter15 .splat. Conversions
+// of each format to the scene model: docs/formats.md.
+#include <algorithm>
+#include <cctype>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "vcar/core/error.hpp"
+#include "vcar/core/gaussian_scene.hpp"
+#include "vcar/io/compressed_ply.hpp"
+#include "vcar/io/ply.hpp"
+#include "vcar/io/splat_file.hpp"
+#include "vcar/io/spz.hpp"
+
+namespace vcar::io {
+
+enum class SceneFormat { ply, compressed_ply, spz, splat };
+
+inline const char* scene_format_name(SceneFormat f) {
+  switch (f) {
+    case SceneFormat::ply: return "PLY";
+    case SceneFormat::compressed_ply: return "compressed PLY";
+    case SceneFormat::spz: return "SPZ";
+    case SceneFormat::splat: return ".splat";
+  }
+  return "?";
+}
+
+namespace detail {
+inline std::string lower_extension(const std::filesystem::path& p) {
+  std::string e = p.extension().string();
+  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return e;
+}
+}  // namespace detail
+
+// The format of a scene file, from its first bytes (and the .splat extension when they match no
+// signature). Throws vcar::Error naming the file when it is none of the four.
+inline SceneFormat detect_scene_format(const std::filesystem::path& path) {
+  const std::string where = path.string();
+  std::ifstream in(path, std::ios::binary);
+  std::error_code ec;
+  if (!in || !std::filesystem::is_regular_file(path, ec)) throw Error("cannot open scene file", where);
+  unsigned char head[4] = {0, 0, 0, 0};
+  in.read(reinterpret_cast<char*>(head), 4);
+  const std::size_t got = static_cast<std::size_t>(in.gcount());
+  if (got >= 4 && head[0] == 'p' && head[1] == 'l' && head[2] == 'y' && (head[3] == '\n' || head[3] == '\r')) {
+    in.clear();
+    in.seekg(0);
+    const detail::PlyHeader h = detail::parse_ply_header(in, where);
+    return detail::is_compressed_ply_header(h) ? SceneFormat::compressed_ply : SceneFormat::ply;
+  }
+  if (got >= 2 && head[0] == 0x1f && head[1] == 0x8b) return SceneFormat::spz;
+  if (got >= 4 && detail::load_u32(head) == spz_magic) return SceneFormat::spz;
+  if (detail::lower_extension(path) == ".splat") return SceneFormat::splat;
+  throw Error("unrecognised scene file: not a PLY (first line 'ply'), not SPZ (gzip or NGSP magic); antimatter15 "
+              "files have no signature and must be named *.splat", where);
+}
+
+// Reads any of the four formats (docs/formats.md); `format`, when given, receives what was read.
+inline GaussianScene read_scene(const std::filesystem::path& path, SceneFormat* format = nullptr) {
+  const SceneFormat f = detect_scene_format(path);
+  if (format) *format = f;
+  switch (f) {
+    case SceneFormat::ply: return read_ply(path);
+    case SceneFormat::compressed_ply: return read_compressed_ply(path);
+    case SceneFormat::spz: return read_spz(path);
+    case SceneFormat::splat: return read_splat(path);
+  }
+  throw Error("unknown scene format", path.string());
+}
+
+// Writes by extension: .splat, .spz, otherwise Inria PLY (binary). Compressed PLY is not written.
+inline void write_scene(const std::filesystem::path& path, const GaussianScene& scene) {
+  const std::string e = detail::lower_extension(path);
+  if (e == ".splat") write_splat(path, scene);
+  else if (e == ".spz") write_spz(path, scene);
+  else write_ply(path, scene);
+}
+
+}  // namespace vcar::io
