@@ -16,6 +16,9 @@
 #include "vcar/io/atomic_file.hpp"
 #include "vcar/io/json_file.hpp"
 #include "vcar/io/ply.hpp"
+#include "vcar/io/scene_file.hpp"
+#include "vcar/io/selection_identity.hpp"
+#include "vcar/io/state_ply.hpp"
 
 namespace vcar::cli {
 
@@ -103,14 +106,97 @@ nlohmann::json selection_json(const Selection& s) {
   if (s.has_log_scales())
     for (std::size_t k = 0; k < s.indices.size(); ++k)
       ls.push_back({s.log_scale[0][k], s.log_scale[1][k], s.log_scale[2][k]});
-  return {{"indices", s.indices}, {"scores", s.scores}, {"log_scales", ls},
-          {"scene_gaussians", s.scene_gaussians}};
+  nlohmann::json j = {{"indices", s.indices}, {"scores", s.scores}, {"log_scales", ls},
+                      {"scene_gaussians", s.scene_gaussians}};
+  if (s.identity) {
+    nlohmann::json ids = nlohmann::json::array();
+    for (std::uint64_t id : s.identity->gaussians) ids.push_back(io::identity_hex(id));
+    j["identity"] = {{"hash", "FNV-1a 64 of the float32 mean, log-scale, rotation, opacity logit and SH (io/selection_identity.hpp)"},
+                     {"scene", {{"gaussians", s.identity->scene.gaussians},
+                                {"ordered", io::identity_hex(s.identity->scene.ordered)},
+                                {"unordered", io::identity_hex(s.identity->scene.unordered)}}},
+                     {"gaussians", ids}};
+  }
+  return j;
 }
 
-Selection read_selection(const std::filesystem::path& file, std::size_t scene_size) {
-  const nlohmann::json j = read_json(file);
+namespace {
+
+bool starts_with_ply(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  char head[4] = {0, 0, 0, 0};
+  in.read(head, 4);
+  return in.gcount() == 4 && head[0] == 'p' && head[1] == 'l' && head[2] == 'y' && (head[3] == '\n' || head[3] == '\r');
+}
+
+// A state PLY as a selection: the Gaussians selected and not deleted, identified in that file.
+Selection selection_from_state_ply(const std::filesystem::path& file) {
+  const std::string where = file.string();
+  const GaussianScene st = io::read_scene(file);
+  const std::vector<std::uint8_t> state = io::state_of(st, where);
+  if (state.empty())
+    throw CliError(exit_bad_input, "PLY without a 'state' property: not a selection (write one with vcar segment --state-ply)", where);
+  Selection s;
+  for (std::size_t i = 0; i < state.size(); ++i)
+    if ((state[i] & io::splat_state::selected) && !(state[i] & io::splat_state::deleted)) s.indices.push_back(static_cast<Index>(i));
+  s.scene_gaussians = st.size();
+  s.identity = io::selection_identity(io::gaussian_identities(st), s.indices);
+  return s;
+}
+
+void read_identity(const nlohmann::json& j, Selection& s, const std::string& where) {
+  if (!j.contains("identity")) return;
+  const auto& id = j["identity"];
+  if (!id.is_object() || !id.contains("scene") || !id.contains("gaussians") || !id["gaussians"].is_array())
+    throw CliError(exit_bad_input, "\"identity\" must hold \"scene\" and \"gaussians\"", where);
+  io::SelectionIdentity out;
+  const auto& sc = id["scene"];
+  out.scene.gaussians = sc.at("gaussians").get<std::uint64_t>();
+  out.scene.ordered = io::identity_from_hex(sc.at("ordered").get<std::string>(), where);
+  out.scene.unordered = io::identity_from_hex(sc.at("unordered").get<std::string>(), where);
+  for (const auto& g : id["gaussians"]) out.gaussians.push_back(io::identity_from_hex(g.get<std::string>(), where));
+  if (out.gaussians.size() != s.indices.size())
+    throw CliError(exit_bad_input, "\"identity\" names " + std::to_string(out.gaussians.size()) + " Gaussians, \"indices\" has " +
+                                       std::to_string(s.indices.size()), where);
+  s.identity = std::move(out);
+}
+
+// Applies `s` to `scene` by identity: entry k becomes Gaussian loc[k]; the entries are then
+// sorted by their new index (scores and scales follow).
+void apply_identity(Selection& s, const GaussianScene& scene, const std::string& where) {
+  io::LocatedSelection loc;
+  try {
+    loc = io::locate_selection(io::gaussian_identities(scene), s.indices, *s.identity, where);
+  } catch (const Error& e) {
+    throw CliError(exit_bad_input, e.what());
+  }
+  if (!loc.reordered) return;
+  std::vector<std::size_t> order(s.indices.size());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return loc.index[a] < loc.index[b]; });
+  Selection r = s;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    r.indices[k] = loc.index[order[k]];
+    r.identity->gaussians[k] = s.identity->gaussians[order[k]];
+    if (!s.scores.empty()) r.scores[k] = s.scores[order[k]];
+    if (s.has_log_scales())
+      for (int d = 0; d < 3; ++d) r.log_scale[d][k] = s.log_scale[d][order[k]];
+  }
+  r.identity->scene = io::scene_fingerprint(io::gaussian_identities(scene));
+  s = std::move(r);
+}
+
+}  // namespace
+
+Selection read_selection(const std::filesystem::path& file, const GaussianScene* scene) {
   const std::string where = file.string();
   Selection s;
+  if (starts_with_ply(file)) {
+    s = selection_from_state_ply(file);
+    if (scene) apply_identity(s, *scene, where);
+    return s;
+  }
+  const nlohmann::json j = read_json(file);
   try {
     if (!j.is_object() || !j.contains("indices") || !j["indices"].is_array())
       throw CliError(exit_bad_input, "expected an object with an \"indices\" array", where);
@@ -130,6 +216,7 @@ Selection read_selection(const std::filesystem::path& file, std::size_t scene_si
         for (int d = 0; d < 3; ++d) s.log_scale[d][k] = ls[k][d].get<float>();
       }
     }
+    read_identity(j, s, where);
   } catch (const nlohmann::json::exception& e) {
     throw CliError(exit_bad_input, std::string("malformed selection: ") + e.what(), where);
   }
@@ -138,6 +225,11 @@ Selection read_selection(const std::filesystem::path& file, std::size_t scene_si
   for (std::size_t k = 1; k < s.indices.size(); ++k)
     if (s.indices[k] <= s.indices[k - 1])
       throw CliError(exit_bad_input, "\"indices\" must be strictly ascending (entry " + std::to_string(k) + ")", where);
+  if (scene && s.identity) {
+    apply_identity(s, *scene, where);
+    return s;
+  }
+  const std::size_t scene_size = scene ? scene->size() : 0;
   if (scene_size > 0) {
     if (s.scene_gaussians != 0 && s.scene_gaussians != scene_size)
       throw CliError(exit_bad_input, "selection was made on a scene of " + std::to_string(s.scene_gaussians) +
@@ -290,6 +382,7 @@ nlohmann::json write_segmentation(const std::filesystem::path& out, const Gaussi
   sel.scores = r.scores;
   sel.log_scale = r.log_scale;
   sel.scene_gaussians = scene.size();
+  sel.identity = io::selection_identity(io::gaussian_identities(scene), r.indices);
   write_json(out / "selection.json", selection_json(sel));
 
   nlohmann::json timings = nlohmann::json::object();

@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "vcar/io/selection_identity.hpp"
 #include "vcar/algo/params.hpp"
 #include "vcar/algo/pipeline.hpp"
 #include "vcar/concepts/segmenter.hpp"
@@ -67,18 +68,24 @@ void write_json(const std::filesystem::path& file, const nlohmann::json& j);
 void make_output_dir(const std::filesystem::path& dir);
 
 // selection.json: {"indices": [...ascending], "scores": [...], "log_scales": [[l0,l1,l2], ...],
-// "scene_gaussians": n}. Scores and log_scales are aligned with indices.
+// "scene_gaussians": n, "identity": {"scene": {"gaussians", "ordered", "unordered"},
+// "gaussians": [hex, ...]}}. Scores, log_scales and identity.gaussians are aligned with indices;
+// the identity (io/selection_identity.hpp) says which Gaussians of which scene were selected.
 struct Selection {
   std::vector<Index> indices;
   std::vector<float> scores;
   LogScales log_scale;        // empty columns: the scene's own scales
   std::size_t scene_gaussians = 0;  // 0 = unknown
+  std::optional<io::SelectionIdentity> identity;  // absent in files of vcar before 0.2
   bool has_log_scales() const { return !log_scale[0].empty(); }
 };
 nlohmann::json selection_json(const Selection& s);
-// Reads and checks a selection (ascending unique indices, aligned arrays); `scene_size` > 0
-// also checks every index against the scene. Errors name the file.
-Selection read_selection(const std::filesystem::path& file, std::size_t scene_size = 0);
+// Reads and checks a selection: selection.json, or a state PLY (`vcar segment --state-ply`, or
+// saved by SuperSplat: the Gaussians flagged selected and not deleted). With `scene`, applies it
+// to that scene: by identity, so a re-sorted copy of the selection's scene gets the same
+// Gaussians (indices, scores and scales re-ordered to match) and any other scene is refused
+// (exit 2, saying why); a file without identity is applied by index after a size check.
+Selection read_selection(const std::filesystem::path& file, const GaussianScene* scene = nullptr);
 
 // ---- parsing -------------------------------------------------------------------------------
 // "u,v;u,v,0": points, label 1 unless a third value says 0 (negative). Errors name `where`.

@@ -24,7 +24,7 @@ int run_eval(const EvalOptions& o, const GlobalOptions& g) {
   progress.message("reading the dataset");
   const OracleDataset ds = load_oracle_dataset(dir);
   const synth::Rig rig = synth::load_rig(dir);
-  const Selection sel = read_selection(o.selection, ds.world.scene.size());
+  const Selection sel = read_selection(o.selection, &ds.world.scene);
 
   EvalInputs in;
   in.scene = &ds.world.scene;

@@ -8,6 +8,7 @@
 #include "scene_inputs.hpp"
 #include "vcar/backends/cpu/tiled_renderer.hpp"
 #include "vcar/io/image_file.hpp"
+#include "vcar/io/state_ply.hpp"
 
 namespace vcar::cli {
 
@@ -22,9 +23,14 @@ int run_render(const RenderOptions& o, const GlobalOptions& g) {
   const GaussianScene scene = load_scene(o.scene);
   Selection sel;
   if (!o.selection.empty()) {
-    sel = read_selection(o.selection, scene.size());
+    sel = read_selection(o.selection, &scene);
     q.subset = &sel.indices;
     if (sel.has_log_scales()) q.log_scale = &sel.log_scale;
+  } else if (const auto state = io::state_of(scene, o.scene); !state.empty()) {
+    // A state PLY as the scene: what SuperSplat shows, every Gaussian not flagged deleted.
+    for (std::size_t i = 0; i < state.size(); ++i)
+      if (!(state[i] & io::splat_state::deleted)) sel.indices.push_back(static_cast<Index>(i));
+    q.subset = &sel.indices;
   }
   q.scene = &scene;
   q.camera = &cam;

@@ -17,6 +17,8 @@
 #include "vcar/io/external_segmenter.hpp"
 #include "vcar/io/image_file.hpp"
 #include "vcar/io/mask_folder_segmenter.hpp"
+#include "vcar/io/scene_file.hpp"
+#include "vcar/io/state_ply.hpp"
 #include "vcar/synth/oracle_segmenter.hpp"
 
 namespace fs = std::filesystem;
@@ -129,6 +131,8 @@ int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
   progress.message("reading scene");
   const GaussianScene scene = load_scene(o.scene);
   make_output_dir(out);
+  if (!o.state_ply.empty() && fs::is_directory(o.state_ply))
+    throw CliError(exit_usage, "is a directory; give a file name", o.state_ply + " (--state-ply)");
 
   cpu::TiledRenderer cpu_renderer;
   std::optional<PhotoRenderer> photos;
@@ -136,7 +140,8 @@ int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
 
   nlohmann::json inputs = {{"scene", o.scene}, {"cameras", o.cameras}, {"images", o.images},
                            {"prompt_view", ref.name}, {"preset", o.preset}, {"set", o.sets},
-                           {"views", cams.size()}};
+                           {"views", cams.size()},
+                           {"scene_format", io::scene_format_name(io::detect_scene_format(o.scene))}};
   nlohmann::json pj = {{"points", nlohmann::json::array()}, {"point_labels", prompt.point_labels},
                        {"text", prompt.text}};
   for (const auto& p : prompt.points) pj["points"].push_back({p.x(), p.y()});
@@ -181,6 +186,13 @@ int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
   progress.done();
 
   const nlohmann::json report = write_segmentation(out, scene, result, params, inputs);
+  if (!o.state_ply.empty()) {
+    try {  // the input scene unchanged (refined scales stay in object.ply and selection.json)
+      io::write_state_ply(o.state_ply, scene, io::selection_state(scene.size(), result.indices));
+    } catch (const Error& e) {
+      throw CliError(exit_output, e.what());
+    }
+  }
   const Diagnostics& d = result.diagnostics;
   std::printf("selected %zu of %zu Gaussians (coarse %zu, fine %zu); max gap %.1f deg, SSS %s; "
               "ABR compressed %zu\n",
@@ -188,6 +200,7 @@ int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
               d.sss_triggered ? "ran" : "skipped", d.abr_compressed);
   if (!d.note.empty()) std::printf("note: %s\n", d.note.c_str());
   std::printf("wrote %s/{object.ply, removed.ply, selection.json, report.json}\n", out.string().c_str());
+  if (!o.state_ply.empty()) std::printf("wrote %s (SuperSplat state: the selection is selected)\n", o.state_ply.c_str());
   (void)report;
   return exit_ok;
 }

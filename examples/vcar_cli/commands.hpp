@@ -20,6 +20,7 @@ struct SegmentOptions {
   double segmenter_timeout = 3600;
   bool keep_requests = false;
   bool segmenter_output = false;  // show the segmenter's stdout/stderr instead of logging it
+  std::string state_ply;          // also write the whole scene with SuperSplat's state flags
 };
 int run_segment(const SegmentOptions& o, const GlobalOptions& g);
 

@@ -46,7 +46,7 @@ int main(int argc, char** argv) {
   // ---- segment ---------------------------------------------------------------------------
   SegmentOptions seg;
   auto* c_seg = app.add_subcommand("segment", "Segment a 3DGS scene from 2D masks (the VCAR pipeline)");
-  c_seg->add_option("--scene", seg.scene, "3DGS PLY file")->required();
+  c_seg->add_option("--scene", seg.scene, "3DGS scene: PLY, compressed PLY, SPZ or .splat")->required();
   c_seg->add_option("--cameras", seg.cameras, "COLMAP sparse dir, cameras.json or transforms.json")->required();
   c_seg->add_option("--images", seg.images, "Training images (default: rendered with the CPU backend)");
   c_seg->add_option("--prompt-view", seg.prompt_view, "Name of the reference view the prompt is given on")->required();
@@ -67,12 +67,14 @@ int main(int argc, char** argv) {
   c_seg->add_flag("--keep-requests", seg.keep_requests, "Keep the segmenter's request directories under OUT/requests");
   c_seg->add_flag("--segmenter-output", seg.segmenter_output, "Show the segmenter's output instead of logging it");
   c_seg->add_option("--out", seg.out, "Output directory")->required();
+  c_seg->add_option("--state-ply", seg.state_ply,
+                    "Also write the whole scene as PLY with SuperSplat's `uchar state` (bit 0: selected)");
 
   // ---- eval ------------------------------------------------------------------------------
   EvalOptions ev;
   auto* c_eval = app.add_subcommand("eval", "Score a selection against a synthetic dataset's ground truth");
   c_eval->add_option("--dataset", ev.dataset, "Dataset directory (vcar synth)")->required();
-  c_eval->add_option("--selection", ev.selection, "selection.json written by vcar segment")->required();
+  c_eval->add_option("--selection", ev.selection, "selection.json or state PLY written by vcar segment")->required();
   c_eval->add_option("--alpha", ev.alpha, "Rendered alpha threshold of the predicted mask")
       ->capture_default_str()->check(CLI::Range(0.0f, 1.0f));
   c_eval->add_flag("--json", ev.json, "Print one JSON object");
@@ -80,12 +82,12 @@ int main(int argc, char** argv) {
   // ---- render ----------------------------------------------------------------------------
   RenderOptions rd;
   auto* c_render = app.add_subcommand("render", "Render a view of a scene (or of a selection) to PNG");
-  c_render->add_option("--scene", rd.scene, "3DGS PLY file")->required();
+  c_render->add_option("--scene", rd.scene, "3DGS scene: PLY, compressed PLY, SPZ, .splat or state PLY")->required();
   c_render->add_option("--cameras", rd.cameras, "COLMAP sparse dir, cameras.json or transforms.json")->required();
   c_render->add_option("--view", rd.view, "View name")->required();
   c_render->add_option("--out", rd.out, "Output PNG (RGB)")->required();
   c_render->add_option("--alpha", rd.alpha, "Also write the alpha channel to this PNG");
-  c_render->add_option("--selection", rd.selection, "Render only this selection (with its refined scales)");
+  c_render->add_option("--selection", rd.selection, "Render only this selection (selection.json with its refined scales, or a state PLY)");
   c_render->add_option("--background", rd.background, "Background colour r,g,b in [0,1]")->capture_default_str();
 
   try {

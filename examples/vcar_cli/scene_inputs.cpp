@@ -2,14 +2,14 @@
 
 #include "cli_common.hpp"
 #include "vcar/io/cameras.hpp"
-#include "vcar/io/ply.hpp"
+#include "vcar/io/scene_file.hpp"
 #include "vcar/synth/dataset.hpp"
 
 namespace vcar::cli {
 
 GaussianScene load_scene(const std::filesystem::path& ply) {
   if (!std::filesystem::exists(ply)) throw CliError(exit_bad_input, "no such file", ply.string() + " (--scene)");
-  GaussianScene s = io::read_ply(ply);
+  GaussianScene s = io::read_scene(ply);  // PLY, compressed PLY, SPZ or .splat, by content
   if (s.empty()) throw CliError(exit_bad_input, "the scene has no Gaussians", ply.string());
   return s;
 }

@@ -12,6 +12,7 @@
 
 namespace vcar::cli {
 
+// A scene in any format io::read_scene knows (docs/formats.md).
 GaussianScene load_scene(const std::filesystem::path& ply);
 std::vector<Camera> load_cameras(const std::filesystem::path& path);
 io::MaskFolderSegmenter make_mask_folder(const std::filesystem::path& dir);

@@ -134,3 +134,47 @@ set_tests_properties(cli/segment_interrupted PROPERTIES FIXTURES_REQUIRED vcar_c
 add_test(NAME cli/segment_sigint_keeps_previous_output
   COMMAND bash ${PROJECT_SOURCE_DIR}/tests/regression/sigint_segment.sh $<TARGET_FILE:vcar_cli> ${_cli_ds} ${_cli_work}/sigint)
 set_tests_properties(cli/segment_sigint_keeps_previous_output PROPERTIES TIMEOUT 120 FIXTURES_REQUIRED vcar_cli_dataset)
+
+# ---- the files splat users exchange (docs/formats.md) --------------------------------------
+# --state-ply: the whole scene with SuperSplat's flags; eval and render read it back.
+vcar_cli_test(NAME segment_state_ply
+  ARGS "${_seg_common}|--masks|${_cli_ds}/masks|--out|${_cli_work}/seg_state|--state-ply|${_cli_work}/seg_state/state.ply" RC 0
+  FIXTURES_REQUIRED vcar_cli_dataset FIXTURES_SETUP vcar_cli_state
+  CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DCLEAN=${_cli_work}/seg_state"
+         "-DFILES=${_cli_work}/seg_state/state.ply|${_cli_work}/seg_state/object.ply"
+         "-DJSON_KEYS=${_cli_work}/seg_state/selection.json:indices,identity"
+         "-DPOSITIVE=${_cli_work}/seg_state/report.json:counts.final")
+vcar_cli_test(NAME eval_state_ply
+  ARGS "eval|--dataset|${_cli_ds}|--selection|${_cli_work}/seg_state/state.ply|--json" RC 0
+  FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_state"
+  CHECKS "-DSTDOUT_JSON_KEYS=mIoU|recall_3d" "-DAT_LEAST=-:recall_3d:0.5|-:mIoU:0.5")
+vcar_cli_test(NAME render_state_ply_scene
+  ARGS "render|--scene|${_cli_work}/seg_state/state.ply|--cameras|${_cli_ds}/cameras.json|--view|train_000|--out|${_cli_work}/state_scene.png" RC 0
+  FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_state" CHECKS "-DFILES=${_cli_work}/state_scene.png")
+vcar_cli_test(NAME render_selection_is_not_a_state_ply
+  ARGS "render|--scene|${_cli_ds}/scene.ply|--cameras|${_cli_ds}/cameras.json|--view|train_000|--selection|${_cli_ds}/scene.ply|--out|${_cli_work}/x.png" RC 2
+  FIXTURES_REQUIRED vcar_cli_dataset CHECKS "-DSTDERR_HAS=scene.ply|without a 'state' property")
+
+# Selections follow their Gaussians: a re-sorted copy of the scene (what an editor saves) gets
+# the same Gaussians; an edited copy is refused. reorder_ply.py reverses the rows.
+add_test(NAME cli/reorder_scene
+  COMMAND /bin/sh -c "/usr/bin/python3 \"$1\" \"$2/scene.ply\" \"$3/reversed.ply\" && /usr/bin/python3 \"$1\" \"$2/scene.ply\" \"$3/edited.ply\" --edit"
+          sh ${CMAKE_CURRENT_SOURCE_DIR}/reorder_ply.py ${_cli_ds} ${_cli_work})
+set_tests_properties(cli/reorder_scene PROPERTIES FIXTURES_REQUIRED vcar_cli_dataset FIXTURES_SETUP vcar_cli_reordered)
+# Segmenting the reversed copy and scoring on the dataset (original order) only works by
+# identity: applied by index, the selection would name other Gaussians.
+vcar_cli_test(NAME segment_reordered_scene
+  ARGS "segment|--scene|${_cli_work}/reversed.ply|--cameras|${_cli_ds}/cameras.json|--masks|${_cli_ds}/masks|--out|${_cli_work}/seg_reversed" RC 0
+  FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_reordered" FIXTURES_SETUP vcar_cli_reversed_selection
+  CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DCLEAN=${_cli_work}/seg_reversed")
+vcar_cli_test(NAME eval_reordered_selection
+  ARGS "eval|--dataset|${_cli_ds}|--selection|${_cli_work}/seg_reversed/selection.json|--json" RC 0
+  FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_reversed_selection"
+  CHECKS "-DAT_LEAST=-:mIoU:0.5|-:recall_3d:0.5|-:precision_3d:0.5")
+vcar_cli_test(NAME render_selection_on_reordered_scene
+  ARGS "render|--scene|${_cli_work}/reversed.ply|--cameras|${_cli_ds}/cameras.json|--view|train_000|--selection|${_cli_work}/seg_masks/selection.json|--out|${_cli_work}/reversed.png" RC 0
+  FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_selection;vcar_cli_reordered" CHECKS "-DFILES=${_cli_work}/reversed.png")
+vcar_cli_test(NAME render_selection_on_edited_scene_refused
+  ARGS "render|--scene|${_cli_work}/edited.ply|--cameras|${_cli_ds}/cameras.json|--view|train_000|--selection|${_cli_work}/seg_masks/selection.json|--out|${_cli_work}/edited.png" RC 2
+  FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_selection;vcar_cli_reordered"
+  CHECKS "-DSTDERR_HAS=selection.json|not the one the selection was made on|refusing")
