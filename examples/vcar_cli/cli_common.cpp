@@ -316,10 +316,11 @@ std::size_t find_view(const std::vector<Camera>& cams, const std::string& name, 
 
 VcarParams make_params(const std::string& preset, const std::vector<std::string>& sets) {
   VcarParams p;
-  if (preset == "nvos") p = VcarParams::nvos();
-  else if (preset == "lerf") p = VcarParams::lerf();
-  else if (preset == "reference_code") p = VcarParams::reference_code();
-  else throw CliError(exit_usage, "unknown preset '" + preset + "'; valid: nvos, lerf, reference_code", "--preset");
+  try {
+    p = VcarParams::preset(preset);
+  } catch (const Error&) {
+    throw CliError(exit_usage, "unknown preset '" + preset + "'; valid: robust, nvos, lerf, reference_code", "--preset");
+  }
   for (const std::string& s : sets) p.set(s);  // vcar::Error naming the key -> exit 2
   p.validate();
   return p;

@@ -44,7 +44,7 @@ int run_demo(const DemoOptions& o, const GlobalOptions& g) {
 
   Prompt prompt;
   prompt.reference_view = rig.reference;
-  const VcarParams params = VcarParams::nvos();
+  const VcarParams params = VcarParams::robust();  // the library's default preset (docs/robust.md)
   cpu::TiledRenderer renderer;
   synth::OracleSegmenter oracle(world, {}, renderer);
   const SegmentationResult result =
@@ -54,7 +54,8 @@ int run_demo(const DemoOptions& o, const GlobalOptions& g) {
   nlohmann::json inputs = {{"scene", "built-in synthetic world"}, {"seed", demo_seed},
                            {"gaussians", demo_gaussians}, {"rig", rig.kind},
                            {"training_views", rig.train.size()}, {"heldout_views", rig.eval.size()},
-                           {"prompt_view", rig.train[rig.reference].name}, {"segmenter", "oracle"}};
+                           {"prompt_view", rig.train[rig.reference].name}, {"segmenter", "oracle"},
+                           {"preset", "robust"}};
   nlohmann::json report = write_segmentation(out, world.scene, result, params, inputs);
 
   progress.message("evaluating on the held-out views");

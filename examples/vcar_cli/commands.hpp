@@ -14,7 +14,7 @@ struct GlobalOptions {
 struct SegmentOptions {
   std::string scene, cameras, images, prompt_view, out;
   std::string masks, segmenter_cmd, oracle;  // exactly one
-  std::string preset = "nvos";
+  std::string preset = "robust";
   std::vector<std::string> sets;
   std::string points, box, text;
   double segmenter_timeout = 3600;

@@ -56,7 +56,7 @@ int main(int argc, char** argv) {
   o_masks->excludes(o_cmd)->excludes(o_oracle);
   o_cmd->excludes(o_oracle);
   c_seg->add_option("--preset", seg.preset, "Parameter preset")
-      ->check(CLI::IsMember({"nvos", "lerf", "reference_code"}))->capture_default_str();
+      ->check(CLI::IsMember({"robust", "nvos", "lerf", "reference_code"}))->capture_default_str();
   c_seg->add_option("--set", seg.sets, "Override a parameter: key=value (repeatable)")->take_all()
       ->allow_extra_args(false);
   c_seg->add_option("--points", seg.points, "Prompt points \"u,v;u,v\" (u,v,0 = negative)");

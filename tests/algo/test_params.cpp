@@ -103,3 +103,35 @@ TEST_CASE("set(key, value) parses every kind of field and rejects unknown keys")
   CHECK(names.count("boundary_samples") == 1);
   CHECK(names.count("depth_tolerance") == 1);
 }
+
+TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond the paper; the paper presets none") {
+  const auto r = VcarParams::robust();
+  CHECK(r.edge_band > 0.f);
+  CHECK(r.fine_occlusion);
+  CHECK(r.coarse_occlusion);
+  CHECK(r.keep_unseen);
+  CHECK_FALSE(r.abr_lowpass);
+  CHECK(r.kappa == 2.f);
+  CHECK(r.robust_vote());
+  CHECK_NOTHROW(r.validate());
+  for (const auto& p : {VcarParams::nvos(), VcarParams::lerf(), VcarParams::reference_code()}) {
+    CHECK_FALSE(p.robust_vote());
+    CHECK(p.edge_band == 0.f);
+    CHECK(p.abr_lowpass);
+  }
+  CHECK(VcarParams::reference_code().force_fine_round);
+  CHECK_FALSE(VcarParams::nvos().force_fine_round);
+  // By name, as the command line and the Python module use them.
+  CHECK(VcarParams::preset("robust").edge_band == r.edge_band);
+  CHECK(VcarParams::preset("reference_code").tau_fine == 0.9f);
+  CHECK_THROWS_WITH(VcarParams::preset("paper"), Catch::Contains("robust, nvos, lerf, reference_code"));
+}
+
+TEST_CASE("validate: rho = 1 can never trigger the strict gate, and the robust parameters have ranges") {
+  VcarParams p;
+  p.rho = 1.f;            CHECK(where_of(p) == "rho");
+  p = {}; p.rho = 0.99f;  CHECK(where_of(p) == "");
+  p = {}; p.edge_band = -0.1f; CHECK(where_of(p) == "edge_band");
+  p = {}; p.edge_band = 1.5f;  CHECK(where_of(p) == "edge_band");
+  p = {}; p.kappa = -1.f;      CHECK(where_of(p) == "kappa");
+}

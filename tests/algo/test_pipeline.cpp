@@ -160,6 +160,96 @@ TEST_CASE("pipeline stages can be switched off") {
     CHECK(r.log_scale[0][k] == w.scene.log_scale[0][r.indices[k]]);
 }
 
+TEST_CASE("with SSS disabled the sphere and view completeness are not computed") {
+  auto w = two_blobs();
+  const auto cams = forward_rig();
+  auto renderer = blank_renderer();
+  auto seg = disc_segmenter();
+  auto p = vcar::VcarParams::nvos();
+  p.enable_sss = false;
+  std::vector<std::string> stages;
+  const auto r = vcar::segment(w.scene, cams, {}, renderer, seg, p, [&](const vcar::Progress& q) {
+    if (q.views == 0) stages.emplace_back(q.stage);
+    return true;
+  });
+  CHECK(std::find(stages.begin(), stages.end(), "view_completeness") == stages.end());
+  CHECK(r.diagnostics.max_gap_deg == 0.0);
+  CHECK(r.diagnostics.valid_cameras == 0);
+  CHECK(same_set(r.indices, w.a));
+}
+
+TEST_CASE("reference_code: the fine round re-votes the training views even when SSS does not trigger") {
+  auto w = two_blobs();
+  const auto cams = orbit_rig();
+  auto renderer = blank_renderer();
+  int rounds = 0;
+  auto seg = disc_segmenter(&rounds);
+  auto p = vcar::VcarParams::reference_code();
+  p.min_frame_content = 0.f;  // the blank renderer draws nothing
+  const auto r = vcar::segment(w.scene, cams, {}, renderer, seg, p);
+  CHECK_FALSE(r.diagnostics.sss_triggered);
+  CHECK(rounds == 2);
+  CHECK(same_set(r.indices, w.a));
+  p.force_fine_round = false;
+  rounds = 0;
+  (void)vcar::segment(w.scene, cams, {}, renderer, seg, p);
+  CHECK(rounds == 1);
+}
+
+TEST_CASE("reference_code's empty-frame filter drops near-empty training frames of the fine round, never the prompt frame") {
+  auto w = two_blobs();
+  const auto cams = forward_rig();
+  auto renderer = blank_renderer();  // alpha 0 everywhere: every frame is empty
+  std::vector<std::size_t> frames_per_round;
+  auto seg = vcar::make_segmenter([&](const vcar::FrameSequence& f, const vcar::Prompt&) {
+    frames_per_round.push_back(f.size());
+    std::vector<std::optional<vcar::Mask>> masks;
+    for (const auto& c : f.cameras) masks.emplace_back(blob_a_mask(c));
+    return masks;
+  });
+  vcar::Prompt prompt;
+  prompt.reference_view = 4;
+  const auto r = vcar::segment(w.scene, cams, prompt, renderer, seg, vcar::VcarParams::reference_code());
+  REQUIRE(frames_per_round.size() == 2);
+  CHECK(frames_per_round[0] == cams.size());
+  CHECK(frames_per_round[1] == 1);  // only the prompt frame survives
+  CHECK(r.diagnostics.sss_triggered);
+}
+
+TEST_CASE("robust preset: fine-round frames render a subset (FrameSequence::subset) and depth comes with them") {
+  auto w = two_blobs();
+  const auto cams = forward_rig();
+  int depth_requests = 0, renders = 0;
+  auto renderer = vcar::make_renderer([&](const vcar::RenderRequest& q) {
+    ++renders;
+    depth_requests += q.want_depth;
+    vcar::RenderOutput out;
+    out.rgb = vcar::ImageF(q.camera->width, q.camera->height, 3, 0.f);
+    out.alpha = vcar::ImageF(q.camera->width, q.camera->height, 1, 0.f);
+    if (q.want_depth) out.depth = vcar::ImageF(q.camera->width, q.camera->height, 1, 0.f);
+    return out;
+  });
+  std::vector<bool> subset_flags;
+  auto seg = vcar::make_segmenter([&](const vcar::FrameSequence& f, const vcar::Prompt&) {
+    subset_flags.push_back(f.subset);
+    std::vector<std::optional<vcar::Mask>> masks;
+    for (std::size_t k = 0; k < f.size(); ++k) {
+      (void)f.image(k);  // a segmenter that looks at the pixels
+      masks.emplace_back(blob_a_mask(f.cameras[k]));
+    }
+    return masks;
+  });
+  vcar::Prompt prompt;
+  prompt.reference_view = 4;
+  const auto r = vcar::segment(w.scene, cams, prompt, renderer, seg);  // default: VcarParams::robust()
+  CHECK(subset_flags == std::vector<bool>{false, true});
+  CHECK(same_set(r.indices, w.a));
+  // Every frame rendered once for the segmenter, with depth (the occlusion test of both rounds);
+  // the lambda answers all frames before voting, so the occlusion test renders depth again.
+  CHECK(depth_requests == renders);
+  CHECK(renders >= static_cast<int>(cams.size() + cams.size() + 32));
+}
+
 TEST_CASE("pipeline: bad input and edge cases") {
   auto w = two_blobs(100);
   const auto cams = forward_rig();

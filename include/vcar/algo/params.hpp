@@ -69,6 +69,28 @@ struct VcarParams {
   float min_frame_content = 0.f;
   // A mask whose foreground fraction is <= this counts as no mask. 0 = off (paper); code 0.001.
   float min_mask_fraction = 0.f;
+  // The released NVOS protocol re-renders the training views from G_coarse and votes them
+  // again (tau_fine) even when SSS does not trigger (its force_round2). Off in the paper.
+  bool force_fine_round = false;
+  // --- Beyond the paper: the robust preset (docs/robust.md), each off in the paper presets --
+  // Eq. R1-R2: a mask's edge band of half-width w_j = max(1, round(edge_band sqrt(A_j / pi)))
+  // px is no evidence; 0 = off.
+  float edge_band = 0.f;
+  // Eq. R3: a Gaussian behind the view's rendered surface, z > (depth / alpha)(p)
+  // (1 + depth_tolerance) where alpha(p) >= 0.5, is occluded there (evidence of the lower
+  // "plain" level only, Eq. R2). Fine round: renders of G_coarse; coarse round: of the scene.
+  bool fine_occlusion = false;
+  bool coarse_occlusion = false;
+  // Eq. R2: prior weight, in views, that ties each evidence level's ratio to the level below.
+  float kappa = 2.f;
+  // Eq. R4: a fine-round candidate that no fine view sees keeps its coarse decision.
+  bool keep_unseen = false;
+  // Eq. R2: a Gaussian the coarse round sees unoccluded but only inside edge bands is passed on
+  // to the fine round (undecided) instead of being judged by its centre pixels.
+  bool keep_undecided = false;
+  // Eq. 9-13 read Sigma2D with the renderer's eps2d low-pass (CONVENTIONS 3, true) or the
+  // Gaussian's own footprint (false: overflow within ~1.6 px no longer forces f_min).
+  bool abr_lowpass = true;
 
   // Paper defaults for NVOS (Sec. 4.2).
   static VcarParams nvos() { return VcarParams{}; }
@@ -94,8 +116,33 @@ struct VcarParams {
     p.abr_variant = AbrVariant::ReferenceCode;
     p.min_frame_content = 0.005f;
     p.min_mask_fraction = 0.001f;
+    p.force_fine_round = true;
     return p;
   }
+  // vcar's default (beyond the paper, docs/robust.md): tau_coarse 0.5, tau_fine 0.5, the edge
+  // band (R1-R2), the occlusion test in both rounds (R3), unseen fine candidates kept (R4) and
+  // ABR on the Gaussians' own footprints. What vcar::segment uses when given no parameters.
+  static VcarParams robust() {
+    VcarParams p;
+    p.tau_fine = 0.5f;
+    p.edge_band = 0.1f;
+    p.fine_occlusion = true;
+    p.coarse_occlusion = true;
+    p.keep_unseen = true;
+    p.abr_lowpass = false;
+    return p;
+  }
+  // A preset by name: robust, nvos, lerf, reference_code; vcar::Error otherwise.
+  static VcarParams preset(std::string_view name) {
+    if (name == "robust") return robust();
+    if (name == "nvos") return nvos();
+    if (name == "lerf") return lerf();
+    if (name == "reference_code") return reference_code();
+    throw Error("unknown preset '" + std::string(name) + "'; valid: robust, nvos, lerf, reference_code", "preset");
+  }
+
+  // True when a mechanism beyond the paper changes the vote (RobustVoting, Eq. R1-R4).
+  bool robust_vote() const { return edge_band > 0.f || fine_occlusion || coarse_occlusion || keep_unseen; }
 
   // Calls f(name, field) for every field, names exactly as declared (const and non-const).
   template <class Self, class F>
@@ -112,6 +159,9 @@ struct VcarParams {
     f("sampled_intrinsics", p.sampled_intrinsics); f("sampled_fov_deg", p.sampled_fov_deg);
     f("background", p.background); f("abr_variant", p.abr_variant);
     f("min_frame_content", p.min_frame_content); f("min_mask_fraction", p.min_mask_fraction);
+    f("force_fine_round", p.force_fine_round); f("edge_band", p.edge_band);
+    f("fine_occlusion", p.fine_occlusion); f("coarse_occlusion", p.coarse_occlusion);
+    f("keep_unseen", p.keep_unseen); f("keep_undecided", p.keep_undecided); f("kappa", p.kappa); f("abr_lowpass", p.abr_lowpass);
   }
 
   // Comma-separated list of the field names (for error messages and --help).
@@ -151,7 +201,7 @@ struct VcarParams {
     unit("tau_coarse", tau_coarse);
     unit("tau_fine", tau_fine);
     unit("rho_min", rho_min);
-    unit("rho", rho);
+    if (!(rho >= 0.f && rho < 1.f)) bad("rho", "must be in [0, 1) (the gate is ratio > rho), got " + std::to_string(rho));
     if (!(eta > 0.f && std::isfinite(eta))) bad("eta", "must be positive");
     if (K < 1) bad("K", "must be >= 1, got " + std::to_string(K));
     if (!(Delta_th_deg >= 0.f && Delta_th_deg <= 180.f)) bad("Delta_th_deg", "must be in [0, 180]");
@@ -171,6 +221,8 @@ struct VcarParams {
       bad("background", "each channel must be in [0, 1]");
     unit("min_frame_content", min_frame_content);
     unit("min_mask_fraction", min_mask_fraction);
+    if (!(kappa >= 0.f && std::isfinite(kappa))) bad("kappa", "must be >= 0, got " + std::to_string(kappa));
+    if (!(edge_band >= 0.f && edge_band <= 1.f)) bad("edge_band", "must be in [0, 1] (0 = off), got " + std::to_string(edge_band));
   }
 
 private:

@@ -18,6 +18,7 @@
 
 #include <Eigen/Core>
 
+#include "vcar/algo/robust_voting.hpp"
 #include "vcar/algo/boundary_refinement.hpp"
 #include "vcar/algo/params.hpp"
 #include "vcar/algo/robust_sphere.hpp"
@@ -93,18 +94,23 @@ struct RoundTimes {
 };
 
 // One segmentation round: renders frames on demand from `subset` (null = whole scene), streams
-// each mask into `on_mask(frame, mask)`, validates sizes, maps segmenter failures to errors.
+// each mask into `on_mask(frame, mask, render)`, validates sizes, maps segmenter failures to
+// errors. With `keep_depth` the frame's render asks for depth too and the latest one is handed
+// to on_mask when its mask arrives (else `render` is null): a segmenter that asks for a frame
+// just before answering it costs one render per frame, depth included.
 template <Renderer R, Segmenter S, class OnMask>
 RoundTimes run_round(std::string_view round, const GaussianScene& scene,
                      const std::vector<Index>* subset, std::span<const Camera> frames,
                      const Prompt& prompt, R& renderer, S& segmenter, const VcarParams& params,
                      const ProgressCallback& progress, Clock::time_point t_start, OnMask&& on_mask,
-                     std::size_t& masks_missing) {
+                     std::size_t& masks_missing, bool keep_depth = false) {
   RoundTimes t;
   const auto t0 = Clock::now();
   std::vector<bool> seen(frames.size(), false);
+  std::optional<std::pair<std::size_t, RenderOutput>> last;  // the latest render, when keep_depth
   FrameSequence seq;
   seq.cameras = frames;
+  seq.subset = subset != nullptr;
   seq.image = [&](std::size_t k) -> ImageRGB8 {
     if (k >= frames.size()) throw Error("frame " + std::to_string(k) + " out of range", std::string(round));
     const auto tr = Clock::now();
@@ -113,7 +119,10 @@ RoundTimes run_round(std::string_view round, const GaussianScene& scene,
     q.camera = &frames[k];
     q.subset = subset;
     q.background = params.background;
-    ImageRGB8 img = to_8bit(renderer.render(q).rgb);
+    q.want_depth = keep_depth;
+    RenderOutput out = renderer.render(q);
+    ImageRGB8 img = to_8bit(out.rgb);
+    if (keep_depth) last.emplace(k, std::move(out));
     t.render += seconds_since(tr);
     return img;
   };
@@ -131,7 +140,7 @@ RoundTimes run_round(std::string_view round, const GaussianScene& scene,
                   std::string(round) + ", view '" + cam.name + "'");
     if (!m) ++masks_missing;
     const auto tv = Clock::now();
-    on_mask(k, m);
+    on_mask(k, m, last && last->first == k ? &last->second : nullptr);
     t.voting += seconds_since(tv);
     if (progress && !progress({round, k + 1, frames.size(), seconds_since(t_start)}))
       throw Cancelled(std::string(round));
@@ -169,27 +178,72 @@ inline AbrParams abr_params(const VcarParams& p) {
   a.f_min = p.f_min;
   a.boundary_samples = p.boundary_samples;
   a.reference_code_rules = p.abr_variant == AbrVariant::ReferenceCode;
+  if (!p.abr_lowpass) a.projection.eps2d = 0.f;  // the Gaussian's own footprint
   return a;
 }
 
-// One vote of one view; with occlusion_aware (beyond the paper) the view's expected depth is
-// rendered from the same Gaussians the segmenter saw.
+// The vote of one round: the paper's VisibilityVoting (Eq. 1-3, and the occlusion_aware
+// option), or RobustVoting when a mechanism beyond the paper is on (docs/robust.md).
+class RoundVote {
+public:
+  RoundVote(const GaussianScene& scene, const std::vector<Index>* candidates, const VcarParams& p, bool fine)
+      : occlusion_(p.occlusion_aware || (fine ? p.fine_occlusion : p.coarse_occlusion)),
+        undecided_kept_(!fine && p.keep_undecided), keep_unseen_(fine && p.keep_unseen) {
+    if (p.robust_vote()) {
+      if (candidates) robust_.emplace(scene, *candidates, p.edge_band, p.kappa);
+      else robust_.emplace(scene, p.edge_band, p.kappa);
+    } else if (candidates) {
+      paper_.emplace(scene, *candidates);
+    } else {
+      paper_.emplace(scene);
+    }
+  }
+  bool wants_depth() const { return occlusion_; }
+
+  // One view; `render` (depth + alpha) when the occlusion test is on.
+  void add_view(const Camera& cam, const Mask* m, const RenderOutput* render, float tolerance) {
+    const ImageF* depth = render ? &render->depth : nullptr;
+    const ImageF* alpha = render ? &render->alpha : nullptr;
+    if (robust_) robust_->add_view(cam, m, depth, alpha, tolerance);
+    else if (depth) paper_->add_view(cam, m, depth, alpha, tolerance);
+    else paper_->add_view(cam, m);
+  }
+  // Eq. 3 (paper) or Eq. R2-R4 (robust): ascending scene indices and their scores.
+  void selected(float tau, std::vector<Index>& indices, std::vector<float>& scores) const {
+    if (robust_) return robust_->selected(tau, undecided_kept_, keep_unseen_, indices, scores);
+    indices = paper_->selected(tau);
+    scores.clear();
+    for (Index i : indices) scores.push_back(paper_->ratio_of(i));
+  }
+
+private:
+  bool occlusion_, undecided_kept_, keep_unseen_;
+  std::optional<VisibilityVoting> paper_;
+  std::optional<RobustVoting> robust_;
+};
+
+// One vote of one view. With the occlusion test the view's expected depth comes from `render`
+// when the round kept it, else it is rendered from the same Gaussians the segmenter saw.
 template <Renderer R>
-void vote(VisibilityVoting& voting, const Camera& cam, const Mask* m, const GaussianScene& scene,
-          const std::vector<Index>* subset, R& renderer, const VcarParams& params) {
-  if (!params.occlusion_aware || !m) {
-    voting.add_view(cam, m);
+void vote(RoundVote& voting, const Camera& cam, const Mask* m, const RenderOutput* render,
+          const GaussianScene& scene, const std::vector<Index>* subset, R& renderer, const VcarParams& params) {
+  if (!voting.wants_depth() || !m) {
+    voting.add_view(cam, m, nullptr, params.depth_tolerance);
     return;
   }
-  RenderRequest q;
-  q.scene = &scene;
-  q.camera = &cam;
-  q.subset = subset;
-  q.want_depth = true;
-  const RenderOutput out = renderer.render(q);
-  if (out.depth.empty())
-    throw Error("occlusion_aware needs a renderer that returns depth", "view '" + cam.name + "'");
-  voting.add_view(cam, m, &out.depth, &out.alpha, params.depth_tolerance);
+  RenderOutput own;
+  if (!render || render->depth.empty()) {
+    RenderRequest q;
+    q.scene = &scene;
+    q.camera = &cam;
+    q.subset = subset;
+    q.want_depth = true;
+    own = renderer.render(q);
+    render = &own;
+  }
+  if (render->depth.empty())
+    throw Error("the occlusion test needs a renderer that returns depth", "view '" + cam.name + "'");
+  voting.add_view(cam, m, render, params.depth_tolerance);
 }
 
 }  // namespace detail
@@ -202,7 +256,7 @@ void vote(VisibilityVoting& voting, const Camera& cam, const Mask* m, const Gaus
 template <Renderer R, Segmenter S>
 SegmentationResult segment(const GaussianScene& scene, const std::vector<Camera>& train_cameras,
                            const Prompt& prompt, R& renderer, S& segmenter,
-                           const VcarParams& params, const ProgressCallback& progress = {}) {
+                           const VcarParams& params = VcarParams::robust(), const ProgressCallback& progress = {}) {
   using detail::Clock;
   using detail::seconds_since;
   params.validate();
@@ -240,27 +294,23 @@ SegmentationResult segment(const GaussianScene& scene, const std::vector<Camera>
     return static_cast<double>(fg) > params.min_mask_fraction * static_cast<double>(m->pixels()) ? m : nullptr;
   };
 
-  // ---- Stage 1: coarse VWV on the training views, rendered from the whole scene (Eq. 1-3).
+  // ---- Stage 1: coarse VWV on the training views, rendered from the whole scene (Eq. 1-3;
+  // with edge_band, Eq. R1-R2).
   stage("coarse");
-  VisibilityVoting coarse(scene);
+  detail::RoundVote coarse(scene, nullptr, params, false);
   const detail::RoundTimes t1 = detail::run_round(
       "coarse round", scene, nullptr, frames, prompt, renderer, segmenter, params, progress,
-      t_start, [&](std::size_t k, const Mask* m) {
+      t_start, [&](std::size_t k, const Mask* m, const RenderOutput* render) {
         m = usable(m);
-        detail::vote(coarse, frames[k], m, scene, nullptr, renderer, params);
+        detail::vote(coarse, frames[k], m, render, scene, nullptr, renderer, params);
         keep_training_mask(k, m);
-      }, diag.masks_missing);
+      }, diag.masks_missing, coarse.wants_depth());
   timing("coarse_render", t1.render);
   timing("coarse_segment", t1.total - t1.render - t1.voting);
   timing("coarse_voting", t1.voting);
-  std::vector<Index> selected = coarse.selected(params.tau_coarse);
-  auto scores_of = [](const VisibilityVoting& v, const std::vector<Index>& sel) {
-    std::vector<float> s;
-    s.reserve(sel.size());
-    for (Index i : sel) s.push_back(v.ratio_of(i));
-    return s;
-  };
-  std::vector<float> scores = scores_of(coarse, selected);
+  std::vector<Index> selected;
+  std::vector<float> scores;
+  coarse.selected(params.tau_coarse, selected, scores);
   diag.n_coarse = diag.n_fine = diag.n_final = selected.size();
   if (selected.empty()) {
     diag.note = "the coarse stage selected no Gaussian (no training view shows the target, or every mask is empty)";
@@ -268,46 +318,59 @@ SegmentationResult segment(const GaussianScene& scene, const std::vector<Camera>
     return result;
   }
 
-  // ---- Stage 2: sphere (Eq. 4-5), view completeness (Eq. 6), SSS (Eq. 7-8), fine VWV.
-  stage("view_completeness");
-  auto tv = Clock::now();
-  diag.sphere = robust_sphere(scene, selected, train_cameras[ref].position(), params.eta);
-  const auto valid = valid_cameras(scene, selected, train_cameras, params.rho_min);
-  diag.valid_cameras = valid.size();
-  std::vector<Eigen::Vector3f> positions;
-  for (std::size_t j : valid) positions.push_back(train_cameras[j].position());
-  const AngularGap gap = max_angular_gap(fibonacci_lattice(params.K), headings(diag.sphere.c, positions));
-  diag.max_gap_deg = gap.Delta_max_deg;
-  diag.gap_direction = gap.direction;
-  timing("vca", seconds_since(tv));
+  // ---- Stage 2: sphere (Eq. 4-5), view completeness (Eq. 6), SSS (Eq. 7-8), fine VWV. The
+  // sphere and the gap only serve SSS: with SSS off they are not computed.
+  AngularGap gap;
+  if (params.enable_sss) {
+    stage("view_completeness");
+    auto tv = Clock::now();
+    diag.sphere = robust_sphere(scene, selected, train_cameras[ref].position(), params.eta);
+    const auto valid = valid_cameras(scene, selected, train_cameras, params.rho_min);
+    diag.valid_cameras = valid.size();
+    std::vector<Eigen::Vector3f> positions;
+    for (std::size_t j : valid) positions.push_back(train_cameras[j].position());
+    gap = max_angular_gap(fibonacci_lattice(params.K), headings(diag.sphere.c, positions));
+    diag.max_gap_deg = gap.Delta_max_deg;
+    diag.gap_direction = gap.direction;
+    timing("vca", seconds_since(tv));
+  }
 
   diag.sss_triggered = params.enable_sss && (params.force_sss || gap.Delta_max_deg > params.Delta_th_deg);
-  if (diag.sss_triggered) {
+  if (diag.sss_triggered || params.force_fine_round) {
     stage("sss");
-    const Eigen::Vector3f up = estimate_scene_up(train_cameras);
-    const Intrinsics intr = sampled_view_intrinsics(train_cameras[ref], params.sampled_intrinsics, params.sampled_fov_deg);
-    diag.sampled_cameras = params.gap_directed
-        ? gap_directed_cameras(diag.sphere, up, gap.direction, intr, params.gap_directed_views, params.gap_directed_cone_deg)
-        : spiral_cameras(diag.sphere, up, intr, params);
+    if (diag.sss_triggered) {
+      const Eigen::Vector3f up = estimate_scene_up(train_cameras);
+      const Intrinsics intr = sampled_view_intrinsics(train_cameras[ref], params.sampled_intrinsics, params.sampled_fov_deg);
+      diag.sampled_cameras = params.gap_directed
+          ? gap_directed_cameras(diag.sphere, up, gap.direction, intr, params.gap_directed_views, params.gap_directed_cone_deg)
+          : spiral_cameras(diag.sphere, up, intr, params);
+    }
     const std::vector<Index> coarse_set = selected;
-    std::vector<Camera> fine_frames = frames;
-    for (const Camera& c : diag.sampled_cameras)
-      if (!(params.min_frame_content > 0.f) || detail::content_fraction(scene, coarse_set, c, renderer) >= params.min_frame_content)
-        fine_frames.push_back(c);  // CONVENTIONS 7: the code drops near-empty sampled frames
-    VisibilityVoting fine(scene, coarse_set);
+    std::vector<Camera> fine_frames;
+    std::vector<std::size_t> fine_train;  // fine frame -> training frame k (npos: sampled)
+    auto add_frame = [&](const Camera& c, std::size_t k) {
+      // CONVENTIONS 7: the code drops near-empty frames of this round, the prompt frame excepted.
+      if (k != 0 && params.min_frame_content > 0.f &&
+          detail::content_fraction(scene, coarse_set, c, renderer) < params.min_frame_content)
+        return;
+      fine_frames.push_back(c);
+      fine_train.push_back(k);
+    };
+    for (std::size_t k = 0; k < frames.size(); ++k) add_frame(frames[k], k);
+    for (const Camera& c : diag.sampled_cameras) add_frame(c, static_cast<std::size_t>(-1));
+    detail::RoundVote fine(scene, &coarse_set, params, true);
     for (auto& m : train_masks) m.reset();
     const detail::RoundTimes t2 = detail::run_round(
         "fine round", scene, &coarse_set, fine_frames, prompt, renderer, segmenter, params,
-        progress, t_start, [&](std::size_t k, const Mask* m) {
+        progress, t_start, [&](std::size_t k, const Mask* m, const RenderOutput* render) {
           m = usable(m);
-          detail::vote(fine, fine_frames[k], m, scene, &coarse_set, renderer, params);
-          keep_training_mask(k, m);
-        }, diag.masks_missing);
+          detail::vote(fine, fine_frames[k], m, render, scene, &coarse_set, renderer, params);
+          if (fine_train[k] < M) keep_training_mask(fine_train[k], m);
+        }, diag.masks_missing, fine.wants_depth());
     timing("fine_render", t2.render);
     timing("fine_segment", t2.total - t2.render - t2.voting);
     timing("fine_voting", t2.voting);
-    selected = fine.selected(params.tau_fine);
-    scores = scores_of(fine, selected);
+    fine.selected(params.tau_fine, selected, scores);
     diag.n_fine = diag.n_final = selected.size();
     if (selected.empty()) {
       diag.note = "the fine vote kept no Gaussian (tau_fine too high for these masks?)";

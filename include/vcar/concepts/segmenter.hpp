@@ -50,6 +50,9 @@ struct Prompt {
 struct FrameSequence {
   std::span<const Camera> cameras;                  // frame k's camera; frame 0 = reference
   std::function<ImageRGB8(std::size_t)> image;      // renders frame k (8-bit RGB)
+  // true when the frames render a subset of the scene (the fine round renders G_coarse only):
+  // occluders outside the subset are not in the images, so masks should not be cut by them.
+  bool subset = false;
   std::size_t size() const noexcept { return cameras.size(); }
 };
 

@@ -11,7 +11,8 @@
 //    holds only the target (e.g. SSS views of G_coarse: the pipeline renders only the coarse
 //    Gaussians, so the neighbour that would occlude is not drawn);
 //  - by_name (default): silhouette for cameras whose name starts with `silhouette_prefix`
-//    ("sss_"), visible otherwise.
+//    ("sss_") and for every frame of a sequence that renders a subset (FrameSequence::subset,
+//    the fine round's renders of G_coarse: the occluders are not drawn), visible otherwise.
 // Failure models, applied in this order: drop (no mask) with p_drop; the neighbour's mask
 // instead of the target's with p_swap; dilation (k > 0) / erosion (k < 0) by a Euclidean disc
 // of |k| px; a random shift of up to jitter_px in x and y; n_blobs false-positive discs of
@@ -73,14 +74,15 @@ public:
 
   const OracleParams& params() const { return p_; }
 
-  // The answer for one frame: nullopt when dropped.
-  std::optional<Mask> mask(const Camera& cam, std::size_t frame) const {
+  // The answer for one frame: nullopt when dropped. `subset`: the frame renders a subset of the
+  // scene (by_name answers it with the silhouette).
+  std::optional<Mask> mask(const Camera& cam, std::size_t frame, bool subset = false) const {
     Rng rng(p_.seed, hash_combine(frame, hash_string(cam.name)), pose_hash(cam));
     if (rng.uniform_d() < p_.p_drop) return std::nullopt;
     const int id = rng.uniform_d() < p_.p_swap ? world_->neighbour_id : world_->target_id;
     const bool sil = p_.mode == OracleMode::silhouette ||
-                     (p_.mode == OracleMode::by_name && !p_.silhouette_prefix.empty() &&
-                      cam.name.rfind(p_.silhouette_prefix, 0) == 0);
+                     (p_.mode == OracleMode::by_name &&
+                      (subset || (!p_.silhouette_prefix.empty() && cam.name.rfind(p_.silhouette_prefix, 0) == 0)));
     IdImage img = raycast(*world_, cam, sil ? id : any_object);
     if (render_) render_(img, *world_, cam, sil ? id : any_object);
     Mask m = dilate_erode(mask_of(img, id), p_.dilate_px);
@@ -96,7 +98,7 @@ public:
 
   void segment(const FrameSequence& frames, const Prompt& /*prompt: the target is known*/, const MaskSink& sink) {
     for (std::size_t k = 0; k < frames.size(); ++k) {
-      const std::optional<Mask> m = mask(frames.cameras[k], k);
+      const std::optional<Mask> m = mask(frames.cameras[k], k, frames.subset);
       sink(k, m ? &*m : nullptr);
     }
   }

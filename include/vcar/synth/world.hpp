@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <numbers>
+#include <optional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -83,6 +84,9 @@ struct WorldParams {
   float disc_scale = 0.8f;           // in-plane sigma / local spacing (overlap makes surfaces opaque)
   float normal_scale = 0.05f;        // normal sigma / local spacing (flat discs)
   int n_distractors = 2;             // extra objects on the table, ids 4, 5, ...
+  // The target's shape: sphere, torus (concave), cylinder or box; unset = drawn from the seed.
+  // Setting it changes nothing else of the world (the seed's draws stay the same).
+  std::optional<PrimitiveType> target_type;
 };
 
 namespace detail {
@@ -155,7 +159,18 @@ inline std::vector<Primitive> make_layout(const WorldParams& wp) {
   target.object_id = 1;
   target.texture = random_texture(rng, Pattern::stripes);
   float extent_x = 0.f, contact_z = 0.f;
-  switch (rng.uniform_int(0, 3)) {
+  const int drawn = rng.uniform_int(0, 3);
+  int kind = drawn;
+  if (wp.target_type) {
+    switch (*wp.target_type) {
+      case PrimitiveType::sphere: kind = 0; break;
+      case PrimitiveType::torus: kind = 1; break;
+      case PrimitiveType::cylinder: kind = 2; break;
+      case PrimitiveType::box: kind = 3; break;
+      default: throw Error("the target must be a sphere, torus, cylinder or box", "WorldParams.target_type");
+    }
+  }
+  switch (kind) {
     case 0: target.type = PrimitiveType::sphere; target.params = {s, 0, 0};
             target.t = {0, 0, s}; extent_x = s; contact_z = s; break;
     case 1: target.type = PrimitiveType::torus; target.params = {0.75f * s, 0.3f * s, 0};

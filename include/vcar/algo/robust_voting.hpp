@@ -1,0 +1,175 @@
+#pragma once
+// Beyond the paper: visibility-based voting that weighs evidence by how reliable it is
+// (docs/robust.md, Eq. R1-R4). With edge_band = 0, no depth images and keep_unseen off it is
+// exactly Eq. 1-3 (VisibilityVoting).
+//
+// Per candidate i and view j where the centre is visible by Eq. 1 at pixel p, three nested
+// kinds of evidence, each a pair of uint16 counters (12 bytes per candidate, whatever the
+// number of views):
+//   plain      (V_i,   F_i)    Eq. 2: visible; foreground if M(p) = 1
+//   unoccluded (V^o_i, F^o_i)  Eq. R3: and not behind the view's rendered surface (only views
+//                              voted with a depth image can occlude; the others count as is)
+//   sure       (V^s_i, F^s_i)  Eq. R1: and p outside the mask's edge band; foreground if p is
+//                              sure foreground (with the band off every pixel is sure)
+// Eq. R2: each level's ratio is shrunk towards the level below with a prior weight of kappa
+// views, so a level seen from one or two views cannot overrule many views of the level below:
+//   R^0_i = F_i / max(V_i, 1)                                    (Eq. 3)
+//   R^1_i = (F^o_i + kappa R^0_i) / (V^o_i + kappa)
+//   R^2_i = (F^s_i + kappa R^1_i) / (V^s_i + kappa),   R_i = R^2_i,   y_i = 1[R_i >= tau].
+// (kappa = 0: the most reliable level with a view decides alone.) With the band off and no
+// depth images all levels hold the same counts and R_i = F_i / V_i, Eq. 3.
+// Two exceptions, each a switch of selected():
+//   undecided_kept: a Gaussian seen unoccluded but only inside bands (V^o > 0 = V^s) is kept
+//                   (the coarse round passes it on to the fine round, which decides);
+//   keep_unseen (Eq. R4): a candidate that no view of the round sees (V = 0) keeps the
+//                   decision of the round that made it a candidate.
+// Views are voted one at a time over all candidates in parallel chunks; each candidate is
+// written by one thread, so results are identical for any thread count.
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "vcar/algo/edge_band.hpp"
+#include "vcar/algo/mean_projection.hpp"
+#include "vcar/core/camera.hpp"
+#include "vcar/core/error.hpp"
+#include "vcar/core/gaussian_scene.hpp"
+#include "vcar/core/image.hpp"
+#include "vcar/core/parallel.hpp"
+
+namespace vcar {
+
+class RobustVoting {
+public:
+  static constexpr std::size_t max_views = 65535;  // uint16_t counters
+  std::size_t chunk = 4096;                        // candidates per parallel task (fixed)
+
+  // Every Gaussian of `scene` is a candidate (means referenced: the scene must outlive this).
+  // beta: Eq. R1a band factor (0 = off).
+  RobustVoting(const GaussianScene& scene, float beta, float kappa = 2.f) : beta_(beta), kappa_(kappa) {
+    init(scene.mean[0].data(), scene.mean[1].data(), scene.mean[2].data(), scene.size());
+  }
+  // The Gaussians `candidates` of `scene` (scene indices, any order; means copied).
+  RobustVoting(const GaussianScene& scene, std::vector<Index> candidates, float beta, float kappa = 2.f)
+      : beta_(beta), kappa_(kappa), candidates_(std::move(candidates)) {
+    for (int d = 0; d < 3; ++d) {
+      own_[d].resize(candidates_.size());
+      for (std::size_t k = 0; k < candidates_.size(); ++k) {
+        if (candidates_[k] >= scene.size())
+          throw Error("candidate index " + std::to_string(candidates_[k]) + " out of range", "voting");
+        own_[d][k] = scene.mean[d][candidates_[k]];
+      }
+    }
+    init(own_[0].data(), own_[1].data(), own_[2].data(), candidates_.size());
+  }
+  RobustVoting(const RobustVoting&) = delete;
+  RobustVoting& operator=(const RobustVoting&) = delete;
+
+  // One view. mask null: no evidence (CONVENTIONS 4). expected_depth and alpha (W x H, one
+  // channel; the view's render of the Gaussians the segmenter saw): Eq. R3 with `tolerance`.
+  void add_view(const Camera& camera, const Mask* mask, const ImageF* expected_depth = nullptr,
+                const ImageF* alpha = nullptr, float tolerance = 0.f) {
+    if (!mask) return;
+    const std::string where = "view '" + camera.name + "'";
+    if (mask->width != camera.width || mask->height != camera.height || mask->channels != 1)
+      throw Error("mask is " + std::to_string(mask->width) + "x" + std::to_string(mask->height) + ", view is " +
+                  std::to_string(camera.width) + "x" + std::to_string(camera.height), where);
+    if ((expected_depth == nullptr) != (alpha == nullptr)) throw Error("depth and alpha come together", where);
+    for (const ImageF* im : {expected_depth, alpha})
+      if (im && (im->width != camera.width || im->height != camera.height || im->channels != 1))
+        throw Error("depth/alpha image is not the view's size with one channel", where);
+    if (views_ + 1 > max_views) throw Error("more than 65535 views with masks (uint16_t counters)", where);
+    ++views_;
+    const std::uint8_t* sure_fg = mask->data.data();
+    const std::uint8_t* sure = nullptr;  // null: every pixel is sure
+    if (!(kappa_ >= 0.f)) throw Error("kappa must be >= 0", "voting");
+    if (beta_ > 0.f) {
+      std::size_t fg = 0;
+      for (std::uint8_t b : mask->data) fg += b != 0;
+      edge_band(*mask, edge_band_width(fg, beta_), band_, scratch_);
+      sure_fg = band_.sure_foreground.data.data();
+      sure = band_.sure.data.data();
+    }
+    const detail::MeanProjection P = detail::MeanProjection::from(camera);
+    const std::uint8_t* M = mask->data.data();
+    const float* D = expected_depth ? expected_depth->data.data() : nullptr;
+    const float* A = alpha ? alpha->data.data() : nullptr;
+    const float scale = 1.f + tolerance;
+    parallel_chunks(static_cast<std::int64_t>(n_), static_cast<std::int64_t>(chunk),
+                    [&](std::int64_t, std::int64_t b, std::int64_t e) {
+      constexpr std::size_t L = detail::mean_batch;
+      alignas(64) std::int32_t pix[L], vis[L];
+      alignas(64) float z[L];
+      for (std::size_t i0 = static_cast<std::size_t>(b); i0 < static_cast<std::size_t>(e); i0 += L) {
+        const std::size_t m = std::min(L, static_cast<std::size_t>(e) - i0);
+        if (m == L) detail::project_batch(P, x_ + i0, y_ + i0, z_ + i0, pix, vis, z);
+        else detail::project_tail(P, x_ + i0, y_ + i0, z_ + i0, m, pix, vis, z);
+        for (std::size_t l = 0; l < m; ++l) {
+          if (!vis[l]) continue;
+          const std::size_t i = i0 + l, p = static_cast<std::size_t>(pix[l]);
+          const std::uint16_t f = M[p] != 0;
+          ++c_[0][i]; c_[1][i] = static_cast<std::uint16_t>(c_[1][i] + f);                  // Eq. 2
+          if (D && A[p] >= 0.5f && !(z[l] <= D[p] / A[p] * scale)) continue;                  // Eq. R3
+          ++c_[2][i]; c_[3][i] = static_cast<std::uint16_t>(c_[3][i] + f);
+          if (sure && !sure[p]) continue;                                                      // Eq. R1
+          ++c_[4][i]; c_[5][i] = static_cast<std::uint16_t>(c_[5][i] + (sure_fg[p] != 0));
+        }
+      }
+    });
+  }
+
+  std::size_t size() const noexcept { return n_; }
+  std::size_t views() const noexcept { return views_; }
+  Index candidate(std::size_t k) const { return candidates_.empty() ? static_cast<Index>(k) : candidates_[k]; }
+  // Counters of candidate k: level 0 plain (V, F), 1 unoccluded (V^o, F^o), 2 sure (V^s, F^s).
+  std::uint16_t visible(std::size_t k, int level = 0) const { return c_[2 * level][k]; }
+  std::uint16_t foreground(std::size_t k, int level = 0) const { return c_[2 * level + 1][k]; }
+
+  // Eq. R2 (Eq. 3 at level 0).
+  float ratio(std::size_t k) const {
+    float R = static_cast<float>(foreground(k)) / static_cast<float>(std::max<std::uint16_t>(visible(k), 1));
+    for (int level = 1; level <= 2; ++level) {
+      const float V = static_cast<float>(visible(k, level)), F = static_cast<float>(foreground(k, level));
+      if (V > 0.f || kappa_ > 0.f) R = V + kappa_ > 0.f ? (F + kappa_ * R) / (V + kappa_) : R;
+    }
+    return R;
+  }
+  // Eq. 3 / R2 / R4 for candidate k (the switches as at the top of the file).
+  bool kept(std::size_t k, float tau, bool undecided_kept, bool keep_unseen) const {
+    if (keep_unseen && visible(k) == 0) return true;
+    if (undecided_kept && beta_ > 0.f && visible(k, 2) == 0 && visible(k, 1) > 0) return true;
+    return ratio(k) >= tau;
+  }
+  // Scene indices (ascending) of the kept candidates, and their R_i.
+  void selected(float tau, bool undecided_kept, bool keep_unseen, std::vector<Index>& indices,
+                std::vector<float>& scores) const {
+    std::vector<std::pair<Index, float>> out;
+    for (std::size_t k = 0; k < n_; ++k)
+      if (kept(k, tau, undecided_kept, keep_unseen)) out.push_back({candidate(k), ratio(k)});
+    std::sort(out.begin(), out.end());
+    indices.clear();
+    scores.clear();
+    for (const auto& [i, r] : out) { indices.push_back(i); scores.push_back(r); }
+  }
+
+private:
+  void init(const float* x, const float* y, const float* z, std::size_t n) {
+    x_ = x; y_ = y; z_ = z; n_ = n;
+    for (auto& c : c_) c.assign(n, 0);
+  }
+
+  float beta_ = 0.f, kappa_ = 2.f;
+  const float *x_ = nullptr, *y_ = nullptr, *z_ = nullptr;
+  std::size_t n_ = 0, views_ = 0;
+  std::vector<Index> candidates_;
+  std::array<std::vector<float>, 3> own_;
+  std::array<std::vector<std::uint16_t>, 6> c_;  // V, F, V^o, F^o, V^s, F^s
+  EdgeBandMasks band_;
+  std::vector<std::uint32_t> scratch_;
+};
+
+}  // namespace vcar

@@ -1,0 +1,135 @@
+#include <catch2/catch.hpp>
+
+#include <random>
+
+#include "vcar/algo/robust_voting.hpp"
+#include "vcar/algo/visibility_voting.hpp"
+
+using vcar::Camera;
+using vcar::ImageF;
+using vcar::Index;
+using vcar::Mask;
+
+namespace {
+// Identity pose, fx = fy = 10, principal point (10, 10), 20 x 20: u = 10 x / z + 10.
+Camera cam20(const char* name) {
+  Camera c;
+  c.name = name;
+  c.width = 20; c.height = 20; c.fx = 10; c.fy = 10; c.cx = 10; c.cy = 10;
+  return c;
+}
+vcar::GaussianScene scene_of(const std::vector<Eigen::Vector3f>& mus) {
+  vcar::GaussianScene s;
+  s.resize(mus.size());
+  for (std::size_t i = 0; i < mus.size(); ++i) s.set(i, mus[i], Eigen::Vector3f::Zero(), {1, 0, 0, 0}, 0.f);
+  return s;
+}
+Mask square(int x0, int y0, int x1, int y1) {
+  Mask m(20, 20, 1);
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x) m.data[static_cast<std::size_t>(y) * 20 + x] = 255;
+  return m;
+}
+}  // namespace
+
+TEST_CASE("Eq. R1-R2 by hand: centre, band and outside pixels of a 10x10 square") {
+  // Pixels (col, row) at z = 1: u = 10 x + 10. Square [5, 15)^2, A = 100: w = max(1,
+  // round(0.2 sqrt(100 / pi))) = round(1.128) = 1.
+  const auto scene = scene_of({
+      {0.05f, 0.05f, 1},   // 0: pixel (10, 10): sure foreground
+      {-0.45f, 0.05f, 1},  // 1: pixel (5, 10): foreground, in the band (left edge)
+      {-0.55f, 0.05f, 1},  // 2: pixel (4, 10): background, in the band
+      {-0.85f, 0.05f, 1},  // 3: pixel (1, 10): sure background
+      {0.05f, 0.05f, -1},  // 4: behind the camera: invisible
+  });
+  const Camera c = cam20("a");
+  const Mask m = square(5, 5, 15, 15);
+  vcar::RobustVoting v(scene, 0.2f);
+  v.add_view(c, &m);
+  v.add_view(c, &m);
+  // Levels: 0 plain (Eq. 2), 1 unoccluded (no depth: = plain), 2 sure.
+  CHECK(v.visible(0, 2) == 2); CHECK(v.foreground(0, 2) == 2);
+  CHECK(v.visible(1, 0) == 2); CHECK(v.foreground(1, 0) == 2); CHECK(v.visible(1, 2) == 0);
+  CHECK(v.visible(2, 0) == 2); CHECK(v.foreground(2, 0) == 0); CHECK(v.visible(2, 2) == 0);
+  CHECK(v.visible(3, 2) == 2); CHECK(v.foreground(3, 2) == 0);
+  CHECK(v.visible(4, 0) == 0);
+  // Eq. R2: the sure level where it has views, else the centre ratio.
+  CHECK(v.ratio(0) == 1.f);
+  CHECK(v.ratio(1) == 1.f);  // band only: centre ratio F / V = 2 / 2
+  CHECK(v.ratio(2) == 0.f);
+  CHECK(v.ratio(3) == 0.f);
+  // keep_undecided keeps 1 and 2 (seen only in the band); keep_unseen keeps 4.
+  std::vector<Index> idx;
+  std::vector<float> sc;
+  v.selected(0.5f, false, false, idx, sc);
+  CHECK(idx == std::vector<Index>{0, 1});
+  v.selected(0.5f, true, false, idx, sc);
+  CHECK(idx == std::vector<Index>{0, 1, 2});
+  v.selected(0.5f, false, true, idx, sc);
+  CHECK(idx == std::vector<Index>{0, 1, 4});
+}
+
+TEST_CASE("Eq. R3 by hand: a Gaussian behind the rendered surface is occluded, within tolerance it is not") {
+  const auto scene = scene_of({
+      {0.05f, 0.05f, 1.0f},   // 0: on the surface (depth 1)
+      {0.1f, 0.1f, 2.0f},     // 1: pixel (10, 10), z = 2: behind the surface -> occluded
+      {0.052f, 0.052f, 1.04f},// 2: z = 1.04 <= 1 * 1.05: within the tolerance
+      {0.45f, 0.45f, 1.0f},   // 3: pixel (14, 14): alpha 0.4 < 0.5 there: no surface, visible
+  });
+  const Camera c = cam20("a");
+  const Mask m = square(0, 0, 20, 20);
+  ImageF depth(20, 20, 1), alpha(20, 20, 1);
+  for (std::size_t p = 0; p < depth.data.size(); ++p) { alpha.data[p] = 0.8f; depth.data[p] = 0.8f; }  // D / A = 1
+  alpha.data[14 * 20 + 14] = 0.4f;
+  depth.data[14 * 20 + 14] = 0.1f;
+  vcar::RobustVoting v(scene, 0.f);
+  v.add_view(c, &m, &depth, &alpha, 0.05f);
+  CHECK(v.visible(0, 1) == 1);
+  CHECK(v.visible(1, 0) == 1);
+  CHECK(v.visible(1, 1) == 0);  // occluded: only the plain level counts it
+  CHECK(v.visible(2, 1) == 1);
+  CHECK(v.visible(3, 1) == 1);
+  // Eq. R2 falls back to the plain level for the occluded one: F / V = 1.
+  CHECK(v.ratio(1) == 1.f);
+}
+
+TEST_CASE("RobustVoting with every mechanism off equals VisibilityVoting (Eq. 1-3) on random scenes") {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> U(-1.f, 1.f);
+  std::vector<Eigen::Vector3f> mus(3000);
+  for (auto& m : mus) m = {U(rng), U(rng), U(rng) + 2.5f};
+  const auto scene = scene_of(mus);
+  std::vector<Index> cand;
+  for (Index i = 0; i < 3000; i += 3) cand.push_back(i);
+  vcar::RobustVoting r(scene, cand, 0.f);
+  vcar::VisibilityVoting p(scene, cand);
+  for (int j = 0; j < 12; ++j) {
+    Camera c = Camera::look_at({2.f * std::cos(0.5f * j), 0.3f, 2.5f + 2.f * std::sin(0.5f * j)}, {0, 0, 2.5f},
+                               {0, -1, 0}, {37, 23, 30, 31, 18.5f, 11.5f}, "c" + std::to_string(j));
+    Mask m(37, 23, 1);
+    for (auto& b : m.data) b = static_cast<std::uint8_t>(rng() % 2 ? 255 : 0);
+    const Mask* mp = j % 5 == 4 ? nullptr : &m;
+    r.add_view(c, mp);
+    p.add_view(c, mp);
+  }
+  for (std::size_t k = 0; k < cand.size(); ++k) {
+    REQUIRE(r.visible(k) == p.visible(k));
+    REQUIRE(r.foreground(k) == p.foreground(k));
+    REQUIRE(r.ratio(k) == p.ratio(k));
+  }
+  std::vector<Index> idx;
+  std::vector<float> sc;
+  r.selected(0.5f, false, false, idx, sc);
+  CHECK(idx == p.selected(0.5f));
+}
+
+TEST_CASE("RobustVoting rejects masks and depth images of the wrong size, naming the view") {
+  const auto scene = scene_of({{0, 0, 1}});
+  vcar::RobustVoting v(scene, 0.1f);
+  const Camera c = cam20("left");
+  Mask bad(10, 20, 1);
+  CHECK_THROWS_WITH(v.add_view(c, &bad), Catch::Contains("view 'left'"));
+  Mask m(20, 20, 1);
+  ImageF d(20, 10, 1), a(20, 20, 1);
+  CHECK_THROWS_WITH(v.add_view(c, &m, &d, &a, 0.05f), Catch::Contains("depth/alpha"));
+}
