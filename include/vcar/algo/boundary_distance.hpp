@@ -10,7 +10,7 @@ namespace vcar {
 
 // l_u (B.3): `samples` points t_k = k L / (samples - 1), k = 0 .. samples-1, uniformly from the
 // centre (k = 0) to the endpoint (k = samples-1), each looked up in the pixel that contains it
-// (floor, CONVENTIONS 2). The boundary is halfway between the last foreground sample and the
+// (floor, conventions §2). The boundary is halfway between the last foreground sample and the
 // first sample outside the foreground or the image; L when every sample is foreground; 0 when the
 // centre itself is outside (no foreground sample; never the case for an eligible observation).
 // Stops at the first exit. (Skipping samples that share a pixel, or testing them 8 at a time

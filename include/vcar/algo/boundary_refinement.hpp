@@ -2,7 +2,7 @@
 // Axis-aware Boundary Refinement, ABR (Sec. 3.4, Eq. 9-14; supplementary B.1-B.3).
 //
 // A streaming accumulator over a candidate set (typically G_fine): every training view with a
-// mask from the latest segmentation round is added once (CONVENTIONS 5); `finish` applies the
+// mask from the latest segmentation round is added once (conventions §5); `finish` applies the
 // gated, reconciled per-axis compression. Per candidate the state is O(1) in the number of views:
 // n_vis, n_ovf (uint16) and the running minimum candidate factor of each of the 3 axes.
 //
@@ -12,14 +12,14 @@
 //  (b) An observation is eligible (n_vis) only when the projected centre is inside the image and
 //      on the mask foreground (B.1); a centre on background contributes nothing.
 //  (c) w_{d*} == 0 (every axis projects to a point along u; lambda is eps2d only): no candidate.
-//  (d) eps2d (CONVENTIONS 3) is owned by no axis: lambda = sum_d w_d + eps2d u^T u, so it stays in
+//  (d) eps2d (conventions §3) is owned by no axis: lambda = sum_d w_d + eps2d u^T u, so it stays in
 //      lambda - w_{d*} of Eq. 13.
 //  (e) Geometry only: the projection is called with opacity 1 (ABR reads mean, scale, rotation);
 //      a centre behind the near plane or beyond the far plane is not eligible.
 //  (f) d* ties go to the lowest axis index.
 //  (g) Candidates are processed internally in Morton order of their means (cache locality of
 //      the mask lookups); every output stays aligned with the candidates as given.
-// `reference_code_rules` (CONVENTIONS 7) switches to the released code: a candidate only when
+// `reference_code_rules` (conventions §7) switches to the released code: a candidate only when
 // (l/sigma_c)^2 < lambda, and the dominant share of lambda is lambda w_{d*} / sum_d w_d (eps2d
 // spread over the axes in proportion) in place of w_{d*}.
 #include <algorithm>
@@ -48,8 +48,8 @@ struct AbrParams {
   float rho = 0.6f;              // overflow-ratio gate, update when gamma > rho (B.3), default 0.6
   float f_min = 0.1f;            // lower bound of the compression factor (Eq. 13, B.3), default 0.1
   int boundary_samples = 129;    // samples from centre to endpoint for l_u (B.3), default 129
-  bool reference_code_rules = false;  // CONVENTIONS 7: the released code's compression rules
-  ProjectionParams projection;   // near/far plane, eps2d, Jacobian clamp (CONVENTIONS 3)
+  bool reference_code_rules = false;  // conventions §7: the released code's compression rules
+  ProjectionParams projection;   // near/far plane, eps2d, Jacobian clamp (conventions §3)
 
   // Throws vcar::Error naming the parameter out of range.
   void validate() const {

@@ -42,7 +42,7 @@ inline ProjectedBatch project(const MeanProjection& w, const float* x, const flo
     return simd::fma(B(w.R[3 * r]), X, simd::fma(B(w.R[3 * r + 1]), Y, simd::fma(B(w.R[3 * r + 2]), Z, B(w.t[r]))));
   };
   const B tx = row(0), ty = row(1), tz = row(2);
-  const B u = (B(w.fx) * tx) / tz + B(w.cx);  // CONVENTIONS 2: u = fx x / z + cx
+  const B u = (B(w.fx) * tx) / tz + B(w.cx);  // conventions §2: u = fx x / z + cx
   const B v = (B(w.fy) * ty) / tz + B(w.cy);
   // Eq. 1: z > 0, 0 <= u < W, 0 <= v < H (NaN fails every comparison).
   const auto in = (tz > B(0.f)) & (u >= B(0.f)) & (u < B(static_cast<float>(w.width))) &

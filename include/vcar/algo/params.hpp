@@ -1,6 +1,6 @@
 #pragma once
-// Every parameter of VCAR (paper Sec. 4.2, supplementary A.1, CONVENTIONS 5) with its paper
-// name, plus the switches that reach the released reference code (CONVENTIONS 7) and the
+// Every parameter of VCAR (paper Sec. 4.2, supplementary A.1, conventions §5) with its paper
+// name, plus the switches that reach the released reference code (conventions §7) and the
 // extensions beyond the paper (off by default).
 #include <cerrno>
 #include <cmath>
@@ -23,7 +23,7 @@ enum class SpiralVariant { Paper, ReferenceCode };
 // field of view on the short side with a centred principal point (same image size).
 enum class SampledIntrinsics { ReferenceView, ReferenceCode45Fov };
 // ABR compression rule (Eq. 12-13). ReferenceCode: compress only when (l/3)^2 < lambda and
-// take the dominant share of lambda in proportion w_d / sum w (CONVENTIONS 7).
+// take the dominant share of lambda in proportion w_d / sum w (conventions §7).
 enum class AbrVariant { Paper, ReferenceCode };
 
 struct VcarParams {
@@ -62,7 +62,7 @@ struct VcarParams {
   float sampled_fov_deg = 45.f;  // field of view on the short side for ReferenceCode45Fov
   // Background (RGB in [0,1]) of the renders handed to the segmenter (paper: black; code white).
   Eigen::Vector3f background = Eigen::Vector3f::Zero();
-  // --- Reference-code differences (CONVENTIONS 7), off in the paper presets ----------------
+  // --- Reference-code differences (conventions §7), off in the paper presets ----------------
   AbrVariant abr_variant = AbrVariant::Paper;
   // Frames whose fraction of non-background pixels is under this are not segmented (the
   // prompt frame is always kept). 0 = off (paper); code 0.005.
@@ -88,7 +88,7 @@ struct VcarParams {
   // Eq. R2: a Gaussian the coarse round sees unoccluded but only inside edge bands is passed on
   // to the fine round (undecided) instead of being judged by its centre pixels.
   bool keep_undecided = false;
-  // Eq. 9-13 read Sigma2D with the renderer's eps2d low-pass (CONVENTIONS 3, true) or the
+  // Eq. 9-13 read Sigma2D with the renderer's eps2d low-pass (conventions §3, true) or the
   // Gaussian's own footprint (false: overflow within ~1.6 px no longer forces f_min).
   bool abr_lowpass = true;
 
@@ -101,8 +101,8 @@ struct VcarParams {
     p.tau_fine = 0.6f;
     return p;
   }
-  // The released reference code's values (CONVENTIONS 7), NVOS thresholds. The spiral frame
-  // stays the scene-up frame (CONVENTIONS 7 fixes the code's z-up/y-up mix); set
+  // The released reference code's values (conventions §7), NVOS thresholds. The spiral frame
+  // stays the scene-up frame (conventions §7 fixes the code's z-up/y-up mix); set
   // spiral_variant=ReferenceCode for the code's world-axis positions.
   static VcarParams reference_code() {
     VcarParams p;

@@ -80,7 +80,7 @@ inline double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-// Frame order of a round: the reference view first (CONVENTIONS 4), then the other training
+// Frame order of a round: the reference view first (conventions §4), then the other training
 // views in their order, then the sampled views.
 inline std::vector<std::size_t> training_order(std::size_t n, std::size_t reference) {
   std::vector<std::size_t> order{reference};
@@ -288,7 +288,7 @@ SegmentationResult segment(const GaussianScene& scene, const std::vector<Camera>
     if (k < M) train_masks[order[k]] = m && params.enable_abr ? std::optional<RleMask>(RleMask::encode(*m)) : std::nullopt;
   };
   auto usable = [&](const Mask* m) -> const Mask* {
-    if (!m || !(params.min_mask_fraction > 0.f)) return m;  // CONVENTIONS 7: the code drops tiny masks
+    if (!m || !(params.min_mask_fraction > 0.f)) return m;  // conventions §7: the code drops tiny masks
     std::size_t fg = 0;
     for (std::uint8_t v : m->data) fg += v != 0;
     return static_cast<double>(fg) > params.min_mask_fraction * static_cast<double>(m->pixels()) ? m : nullptr;
@@ -349,7 +349,7 @@ SegmentationResult segment(const GaussianScene& scene, const std::vector<Camera>
     std::vector<Camera> fine_frames;
     std::vector<std::size_t> fine_train;  // fine frame -> training frame k (npos: sampled)
     auto add_frame = [&](const Camera& c, std::size_t k) {
-      // CONVENTIONS 7: the code drops near-empty frames of this round, the prompt frame excepted.
+      // conventions §7: the code drops near-empty frames of this round, the prompt frame excepted.
       if (k != 0 && params.min_frame_content > 0.f &&
           detail::content_fraction(scene, coarse_set, c, renderer) < params.min_frame_content)
         return;

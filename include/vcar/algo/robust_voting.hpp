@@ -69,7 +69,7 @@ public:
   RobustVoting(const RobustVoting&) = delete;
   RobustVoting& operator=(const RobustVoting&) = delete;
 
-  // One view. mask null: no evidence (CONVENTIONS 4). expected_depth and alpha (W x H, one
+  // One view. mask null: no evidence (conventions §4). expected_depth and alpha (W x H, one
   // channel; the view's render of the Gaussians the segmenter saw): Eq. R3 with `tolerance`.
   void add_view(const Camera& camera, const Mask* mask, const ImageF* expected_depth = nullptr,
                 const ImageF* alpha = nullptr, float tolerance = 0.f) {

@@ -2,11 +2,11 @@
 // Spherical spiral sampling (Eq. 7-8): N_s = S1 S2 cameras on the object sphere, on a spiral
 // of S1 revolutions whose elevation runs from phi_s to phi_e, all looking at the centre.
 //
-// Frame (CONVENTIONS 5): e3 = the scene up; e1 = the world axis (x, then y, then z on ties) least
+// Frame (conventions §5): e3 = the scene up; e1 = the world axis (x, then y, then z on ties) least
 // aligned with up, made orthogonal to it; e2 = e3 x e1. Elevation is measured from the plane
 // orthogonal to up, azimuth from e1 toward e2. SpiralVariant::ReferenceCode uses the world
 // axes (e1, e2, e3) = (x, y, z) for the positions as the released code; the look-at up is the
-// scene up in both (CONVENTIONS 7).
+// scene up in both (conventions §7).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>

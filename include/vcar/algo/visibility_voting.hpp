@@ -4,7 +4,7 @@
 // Per candidate Gaussian i only two counters: F_i = #views with label 1 (Eq. 2: visible and in
 // the mask), V_i = #views with label != -1 (visible by Eq. 1), both uint16_t, so 4 bytes per Gaussian (and
 // 2 more per extra object in MultiObjectVoting), whatever the number of views.
-// R_i = F_i / max(V_i, 1) (Eq. 3). A view without a mask is "no evidence" (CONVENTIONS 4).
+// R_i = F_i / max(V_i, 1) (Eq. 3). A view without a mask is "no evidence" (conventions §4).
 //
 // Views are queued (camera + the mask packed to 1 bit per pixel, W H / 8 bytes) and voted in
 // blocks of a few views per pass over the candidates, so the means are read once per block
@@ -276,7 +276,7 @@ private:
   // Queues one view (packing its masks); false when it carries no evidence.
   bool enqueue(const Camera& camera, std::span<const Mask* const> masks) {
     if (std::none_of(masks.begin(), masks.end(), [](const Mask* m) { return m != nullptr; }))
-      return false;  // CONVENTIONS 4: no evidence, nothing counted
+      return false;  // conventions §4: no evidence, nothing counted
     check_view(camera, masks);
     detail::VoteView w = detail::VoteView::from(camera);
     w.bits_offset = bits_.size();
@@ -332,7 +332,7 @@ public:
   VisibilityVoting(const GaussianScene& scene, std::vector<Index> candidates) : v_(scene, std::move(candidates), 1) {}
   VisibilityVoting(std::span<const float> x, std::span<const float> y, std::span<const float> z) : v_(x, y, z, 1) {}
 
-  // mask null: no evidence in this view (CONVENTIONS 4).
+  // mask null: no evidence in this view (conventions §4).
   void add_view(const Camera& camera, const Mask* mask) { v_.add_view(camera, std::span<const Mask* const>(&mask, 1)); }
   // Occlusion-aware visibility (beyond the paper), rule at the top of the file.
   void add_view(const Camera& camera, const Mask* mask, const ImageF* expected_depth, const ImageF* alpha,
