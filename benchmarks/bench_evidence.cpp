@@ -44,6 +44,7 @@
 
 #include "evidence/peak_memory.hpp"
 #include "evidence/run_record.hpp"
+#include "evidence/filter_cluster.hpp"
 
 namespace {
 
@@ -267,6 +268,8 @@ public:
           res = baselines::ludvig(renderer_, w.scene, rig.train, provider, p);
         } else if (r.method == "lbg") {
           res = baselines::lbg(w.scene, rig.train, provider);
+        } else if (r.method == "filtercluster") {  // splat-transform (evidence/filter_cluster.hpp)
+          res = evidence::filter_cluster(w, rig, renderer_, opt_.out / "work");
         } else {
           throw Error("unknown method '" + m + "'", "--methods");
         }
@@ -274,6 +277,7 @@ public:
         r.t_segment = t_masks;
         r.time_s = r.t_method + t_masks;
         r.frames_segmented = static_cast<int>(rig.train.size());
+        if (r.method == "filtercluster") { r.t_segment = 0; r.time_s = r.t_method; r.frames_segmented = 0; }  // no masks
         sel = std::move(res.selected);
       }
       r.peak_mib = evidence::peak_mib();
@@ -390,7 +394,13 @@ std::vector<Experiment> plan(const Options& o) {
   auto want = [&](const char* sweep) { return o.only.empty() || o.only == sweep; };
   if (want("grid"))
     for (int s = 1; s <= seeds; ++s)
-      for (const auto& rig : rigs) out.push_back(make(s, rig, "none", 0, all_methods()));
+      for (const auto& rig : rigs) {
+        std::vector<std::string> ms = all_methods();
+        // splat-transform --filter-cluster: minutes per run on a software GPU, so full mode and
+        // seed 1 only, and only where it is installed (evidence/filter_cluster.hpp).
+        if (!q && s == 1 && evidence::filter_cluster_available()) ms.push_back("filtercluster");
+        out.push_back(make(s, rig, "none", 0, ms));
+      }
   // Stability sweeps on a forward-facing and a 360-degree rig; VCAR coarse + full and the peers.
   std::vector<std::string> sweep_methods = kPeers;
   sweep_methods.push_back("vcar:coarse");
