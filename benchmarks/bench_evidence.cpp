@@ -37,6 +37,8 @@
 #include "vcar/core/parallel.hpp"
 #include "vcar/eval/aggregate.hpp"
 #include "vcar/eval/selection_metrics.hpp"
+#include "vcar/io/params_text.hpp"
+#include "vcar/io/ply.hpp"
 #include "vcar/synth/ground_truth.hpp"
 #include "vcar/synth/oracle_segmenter.hpp"
 #include "vcar/synth/rigs.hpp"
@@ -100,7 +102,7 @@ public:
   void segment(const FrameSequence& frames, const Prompt&, const MaskSink& sink) {
     for (std::size_t k = 0; k < frames.size(); ++k) {
       (void)frames.image(k);  // a real segmenter needs the render: its cost is part of the method
-      const std::optional<Mask> m = oracle_->mask(frames.cameras[k], k);
+      const std::optional<Mask> m = oracle_->mask(frames.cameras[k], k, frames.subset);
       sink(k, m ? &*m : nullptr);
     }
   }
@@ -119,6 +121,7 @@ struct Experiment {
   std::string failure = "none";
   double level = 0;
   int width = 160, height = 120, n_train = 0;
+  std::string target = "seed";       // seed (drawn), sphere, torus, cylinder, box, donut (trained)
   std::vector<std::string> methods;  // "vcar:<variant>" or a peer's name
 };
 
@@ -130,10 +133,15 @@ struct Options {
   std::string only;
   std::vector<std::string> set;      // --set key=value, applied to every VCAR run
   std::vector<std::string> methods;  // --methods a,b: keep only these (targeted experiments)
+  std::vector<std::string> rigs;     // --rigs a,b: keep only these rigs
+  std::vector<std::string> targets;  // --targets a,b: keep only these targets
 };
 
 const std::vector<std::string> kPeers = {"naive", "sagd", "flashsplat", "gaussiancut", "ludvig", "lbg"};
-const std::vector<std::string> kVariants = {"coarse", "sss", "abr", "full", "occlusion", "gapdir"};
+const std::vector<std::string> kVariants = {"coarse", "sss", "abr", "full", "occlusion", "gapdir", "robust"};
+// The robust preset with one mechanism switched off each (docs/robust.md ablation).
+const std::vector<std::string> kRobustAblation = {"robust-noband", "robust-noocc", "robust-nokeep",
+                                                  "robust-lowpass", "robust-tau08"};
 
 std::vector<std::string> all_methods(bool variants = true) {
   std::vector<std::string> m = kPeers;
@@ -146,7 +154,10 @@ synth::OracleParams oracle_for(const Experiment& e) {
   synth::OracleParams o;
   o.seed = static_cast<std::uint64_t>(e.seed) * 7919u + 13u;
   const double L = e.level;
-  if (e.failure == "dilate") o.dilate_px = static_cast<int>(L);
+  const double diag = std::hypot(static_cast<double>(e.width), static_cast<double>(e.height));
+  if (e.failure == "dilate_diag") o.dilate_px = static_cast<int>(std::lround(L / 100.0 * diag));
+  else if (e.failure == "erode_diag") o.dilate_px = -static_cast<int>(std::lround(L / 100.0 * diag));
+  else if (e.failure == "dilate") o.dilate_px = static_cast<int>(L);
   else if (e.failure == "erode") o.dilate_px = -static_cast<int>(L);
   else if (e.failure == "blobs") o.n_blobs = static_cast<int>(L);
   else if (e.failure == "drop") o.p_drop = L;
@@ -159,17 +170,52 @@ bool is_360(const std::string& rig) { return rig != "forward"; }
 
 // VCAR parameters per variant; preset nvos on forward-facing rigs, lerf on the others (Sec. 4.2).
 VcarParams vcar_params(const std::string& variant, const Experiment& e, const std::vector<std::string>& set) {
+  if (variant.rfind("robust", 0) == 0) {  // one preset for every rig: the library's default
+    VcarParams p = VcarParams::robust();
+    if (variant == "robust-noband") p.edge_band = 0.f;
+    else if (variant == "robust-noocc") p.fine_occlusion = false;
+    else if (variant == "robust-nokeep") p.keep_unseen = false;
+    else if (variant == "robust-lowpass") p.abr_lowpass = true;
+    else if (variant == "robust-tau08") p.tau_fine = 0.8f;
+    else if (variant != "robust") throw Error("unknown variant '" + variant + "'", "--methods");
+    if (e.failure == "tau") { p.tau_coarse = static_cast<float>(e.level); p.tau_fine = static_cast<float>(e.level); }
+    for (const std::string& kv : set) io::set_parameter(p, kv);
+    return p;
+  }
   VcarParams p = is_360(e.rig) ? VcarParams::lerf() : VcarParams::nvos();
   p.enable_sss = variant != "coarse" && variant != "abr";
   p.enable_abr = variant != "coarse" && variant != "sss";
   p.occlusion_aware = variant == "occlusion";
   p.gap_directed = variant == "gapdir";
   if (e.failure == "tau") { p.tau_coarse = static_cast<float>(e.level); p.tau_fine = static_cast<float>(e.level); }
-  for (const std::string& kv : set) p.set(kv);
+  for (const std::string& kv : set) io::set_parameter(p, kv);
   return p;
 }
 
 // ---------------------------------------------------------------------------------------------
+// Real trained Gaussians (tests/data/donut.ply): a copy becomes the target (id 9) on a free spot
+// of the table, with three more copies around it (ids 10-12), one touching it; the rigs then
+// centre on the trained target. Ground truth comes from renders of the copies (ground_truth.hpp).
+void add_trained_donuts(synth::World& w, std::uint64_t seed) {
+  static const GaussianScene donut = io::read_ply(std::filesystem::path(VCAR_TEST_DATA_DIR) / "donut.ply");
+  Eigen::Vector3f lo = Eigen::Vector3f::Constant(INFINITY), hi = -lo;
+  for (std::size_t i = 0; i < donut.size(); ++i) { lo = lo.cwiseMin(donut.mu(i)); hi = hi.cwiseMax(donut.mu(i)); }
+  const float s = 0.15f / (0.5f * (hi - lo).maxCoeff());
+  const Eigen::Vector3f c = 0.5f * (lo + hi);
+  const Eigen::Vector3f at(-0.5f, -0.5f, 0.5f * s * (hi - lo).z() + 0.01f);
+  synth::Rng rng(seed, 0xD0Au);
+  synth::insert_gaussians(w, donut, Eigen::Matrix3f::Identity(), at - s * c, s, 9);
+  const float touch = s * (hi - lo).x();  // side by side: the copies' extents meet
+  const Eigen::Vector3f offsets[3] = {{touch, 0.f, 0.f}, {-0.1f, 0.4f, 0.f}, {-0.42f, 0.05f, 0.f}};
+  for (int k = 0; k < 3; ++k) {
+    const float yaw = rng.uniform(0.f, 6.2831853f);
+    const Eigen::Matrix3f R = Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ()).toRotationMatrix();
+    synth::insert_gaussians(w, donut, R, at + offsets[k] - s * (R * c), s, 10 + k);
+  }
+  w.target_id = 9;
+  w.neighbour_id = 10;
+}
+
 class Driver {
 public:
   explicit Driver(const Options& o) : opt_(o) {}
@@ -182,7 +228,7 @@ public:
   }
 
   void run(const Experiment& e) {
-    const synth::World& w = world(e.seed, e.object_size, e.total);
+    const synth::World& w = world(e.seed, e.object_size, e.total, e.target);
     synth::RigParams rp;
     rp.intrinsics = synth::make_intrinsics(e.width, e.height);
     rp.n_train = e.n_train;
@@ -209,7 +255,7 @@ public:
       r.method = m.rfind("vcar:", 0) == 0 ? "vcar" : m;
       r.variant = r.method == "vcar" ? m.substr(5) : "full";
       r.rig = e.rig; r.seed = e.seed; r.gaussians = w.scene.size(); r.object_gaussians = truth.size();
-      r.failure = e.failure; r.level = e.level; r.width = e.width; r.height = e.height;
+      r.failure = e.failure; r.level = e.level; r.width = e.width; r.height = e.height; r.target = e.target;
       r.n_train = static_cast<int>(rig.train.size()); r.n_eval = static_cast<int>(rig.eval.size());
       const double rss0 = evidence::reset_peak();
       std::vector<Index> sel;
@@ -218,7 +264,7 @@ public:
       const auto t0 = Clock::now();
       if (r.method == "vcar") {
         const VcarParams p = vcar_params(r.variant, e, opt_.set);
-        r.preset = is_360(e.rig) ? "lerf" : "nvos";
+        r.preset = r.variant.rfind("robust", 0) == 0 ? "robust" : is_360(e.rig) ? "lerf" : "nvos";
         SegmentationResult res = segment(w.scene, rig.train, prompt, renderer_, segmenter, p);
         r.time_s = since(t0);
         const Diagnostics& d = res.diagnostics;
@@ -322,14 +368,16 @@ public:
   }
 
 private:
-  const synth::World& world(int seed, std::size_t object_size, std::size_t total) {
-    const std::string key = std::to_string(seed) + "/" + std::to_string(object_size) + "/" + std::to_string(total);
+  const synth::World& world(int seed, std::size_t object_size, std::size_t total, const std::string& target) {
+    const std::string key = std::to_string(seed) + "/" + std::to_string(object_size) + "/" + std::to_string(total) + "/" + target;
     if (cache_key_ != key) {
       synth::WorldParams wp;
       wp.seed = static_cast<std::uint64_t>(seed);
       wp.n_gaussians = object_size;
+      if (target != "seed" && target != "donut") wp.target_type = synth::primitive_type_from_string(target);
       cache_ = synth::generate_world(wp);
       pad_world(cache_, total, static_cast<std::uint64_t>(seed));
+      if (target == "donut") add_trained_donuts(cache_, static_cast<std::uint64_t>(seed));
       cache_key_ = key;
     }
     return cache_;
@@ -396,15 +444,51 @@ std::vector<Experiment> plan(const Options& o) {
     for (int s = 1; s <= seeds; ++s)
       for (const auto& rig : rigs) {
         std::vector<std::string> ms = all_methods();
+        if (!q) for (const auto& v : kRobustAblation) ms.push_back("vcar:" + v);
         // splat-transform --filter-cluster: minutes per run on a software GPU, so full mode and
         // seed 1 only, and only where it is installed (evidence/filter_cluster.hpp).
         if (!q && s == 1 && evidence::filter_cluster_available()) ms.push_back("filtercluster");
         out.push_back(make(s, rig, "none", 0, ms));
       }
-  // Stability sweeps on a forward-facing and a 360-degree rig; VCAR coarse + full and the peers.
+  // Stability sweeps on a forward-facing and a 360-degree rig; VCAR coarse, full, robust and the peers.
   std::vector<std::string> sweep_methods = kPeers;
   sweep_methods.push_back("vcar:coarse");
   sweep_methods.push_back("vcar:full");
+  sweep_methods.push_back("vcar:robust");
+  // Beyond the paper's suite (docs/robust.md): every target shape, concave torus included; masks
+  // eroded/dilated by a share of the image diagonal on every rig; >= 640 px images; trained
+  // Gaussians (tests/data/donut.ply) in a forward and an orbit capture.
+  if (want("targets"))
+    for (int s = 1; s <= seeds; ++s)
+      for (const char* t : {"sphere", "torus", "cylinder", "box"})
+        for (const auto& rig : rigs) {
+          Experiment e = make(s, rig, "none", 0, sweep_methods);
+          e.target = t;
+          out.push_back(e);
+        }
+  if (want("diag"))
+    for (int s = 1; s <= seeds; ++s)
+      for (const auto& rig : rigs)
+        for (const char* f : {"erode_diag", "dilate_diag"})
+          for (double L : q ? std::vector<double>{2} : std::vector<double>{1, 2})
+            out.push_back(make(s, rig, f, L, sweep_methods));
+  if (want("hires") && !q)
+    for (int s = 1; s <= seeds; ++s)
+      for (const auto& rig : rigs)
+        for (const char* t : {"seed", "torus"}) {
+          Experiment e = make(s, rig, "none", 0, sweep_methods);
+          e.width = 640; e.height = 480; e.target = t;
+          out.push_back(e);
+        }
+  if (want("donut"))
+    for (int s = 1; s <= (q ? 1 : seeds); ++s)
+      for (const char* rig : {"forward", "orbit"})
+        for (double L : q ? std::vector<double>{0} : std::vector<double>{0, 2}) {
+          Experiment e = make(s, rig, L > 0 ? "erode" : "none", L, sweep_methods);
+          e.width = 256; e.height = 192; e.target = "donut"; e.object_size = e.total = 20000;
+          if (q && std::string(rig) == "orbit") continue;
+          out.push_back(e);
+        }
   const std::vector<std::string> sweep_rigs = {"forward", "orbit"};
   const int sweep_seeds = q ? 1 : std::max(1, seeds - 1);  // 2 by default in full mode
   struct Sweep { const char* failure; std::vector<double> levels; };
@@ -425,7 +509,7 @@ std::vector<Experiment> plan(const Options& o) {
         for (double L : sw.levels) {
           std::vector<std::string> ms = sweep_methods;
           if (std::string(sw.failure) == "tau")  // methods without a threshold have no tau curve
-            ms = {"naive", "sagd", "gaussiancut", "ludvig", "vcar:coarse", "vcar:full"};
+            ms = {"naive", "sagd", "gaussiancut", "ludvig", "vcar:coarse", "vcar:full", "vcar:robust"};
           out.push_back(make(s, rig, sw.failure, L, ms));
         }
   }
@@ -476,18 +560,19 @@ int main(int argc, char** argv) {
     else if (a == "--max-size") o.max_size = std::stoul(value());
     else if (a == "--only") o.only = value();
     else if (a == "--set") o.set.push_back(value());
-    else if (a == "--methods") {
+    else if (a == "--methods" || a == "--rigs" || a == "--targets") {
+      std::vector<std::string>& list = a == "--methods" ? o.methods : a == "--rigs" ? o.rigs : o.targets;
       const std::string v = value();
       for (std::size_t b = 0, c; b <= v.size(); b = c + 1) {
         c = v.find(',', b);
         if (c == std::string::npos) c = v.size();
-        if (c > b) o.methods.push_back(v.substr(b, c - b));
+        if (c > b) list.push_back(v.substr(b, c - b));
       }
     }
     else {
       std::fprintf(stderr, "usage: %s [--quick|--full] [--out DIR] [--seeds N] [--max-size N] "
-                           "[--only grid|sweeps|dilate|erode|blobs|drop|swap|jitter|tau|views|size] [--set key=value]... "
-                           "[--methods naive,vcar:full,...]\n", argv[0]);
+                           "[--only grid|targets|diag|hires|donut|sweeps|dilate|erode|blobs|drop|swap|jitter|tau|views|size] [--set key=value]... "
+                           "[--methods naive,vcar:full,...] [--rigs forward,...] [--targets torus,...]\n", argv[0]);
       return a == "--help" || a == "-h" ? 0 : 2;
     }
   }
@@ -495,6 +580,10 @@ int main(int argc, char** argv) {
     const auto t0 = Clock::now();
     Driver d(o);
     std::vector<Experiment> p = plan(o);
+    auto listed = [](const std::vector<std::string>& l, const std::string& x) {
+      return l.empty() || std::find(l.begin(), l.end(), x) != l.end();
+    };
+    std::erase_if(p, [&](const Experiment& e) { return !listed(o.rigs, e.rig) || !listed(o.targets, e.target); });
     if (!o.methods.empty())
       for (Experiment& e : p)
         std::erase_if(e.methods, [&](const std::string& m) { return std::find(o.methods.begin(), o.methods.end(), m) == o.methods.end(); });

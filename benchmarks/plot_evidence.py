@@ -23,7 +23,9 @@ plt.rcParams["svg.fonttype"] = "none"  # text stays text (smaller, diff-able)
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RIGS = ["forward", "orbit", "sparse", "hemisphere"]
 PEERS = ["naive", "sagd", "flashsplat", "gaussiancut", "ludvig", "lbg"]
-VARIANTS = ["coarse", "sss", "abr", "full", "occlusion", "gapdir"]
+VARIANTS = ["coarse", "sss", "abr", "full", "occlusion", "gapdir", "robust"]
+ROBUST_ABLATION = ["robust-noband", "robust-noocc", "robust-nokeep", "robust-lowpass", "robust-tau08"]
+TARGETS = ["sphere", "torus", "cylinder", "box"]
 NUM = {"seed", "gaussians", "object_gaussians", "level", "width", "height", "n_train", "n_eval", "miou", "macc",
        "miou_01", "macc_01", "boundary_iou", "boundary_f1", "trimap_iou", "f1_3d", "precision_3d", "recall_3d",
        "selected", "t_render", "t_segment", "t_vote", "t_vca", "t_sss", "t_abr", "t_method", "time_s",
@@ -38,8 +40,15 @@ def load(path):
             for k in NUM:
                 r[k] = float(r[k]) if r.get(k, "") != "" else math.nan
             r["key"] = "vcar:" + r["variant"] if r["method"] == "vcar" else r["method"]
+            r["target"] = r.get("target") or "seed"  # rows written before the column existed
             rows.append(r)
     return rows
+
+
+def headline(rows):
+    """The paper-suite rows: the seed's own target at 160 x 120 (the targets, diag, hires and donut sweeps
+    have their own tables)."""
+    return [r for r in rows if r["target"] == "seed" and r["width"] == 160]
 
 
 def mean(xs):
@@ -64,14 +73,18 @@ def group(rows, keys):
 
 def label(key):
     return {"vcar:full": "VCAR", "vcar:coarse": "VCAR coarse", "vcar:sss": "VCAR +SSS", "vcar:abr": "VCAR +ABR",
-            "vcar:occlusion": "VCAR occl.", "vcar:gapdir": "VCAR gap-dir."}.get(key, key)
+            "vcar:occlusion": "VCAR occl.", "vcar:gapdir": "VCAR gap-dir.", "vcar:robust": "vcar robust",
+            "vcar:robust-noband": "robust - band (R1)", "vcar:robust-noocc": "robust - fine occlusion (R3)",
+            "vcar:robust-nokeep": "robust - keep unseen (R4)", "vcar:robust-lowpass": "robust + ABR low-pass",
+            "vcar:robust-tau08": "robust, tau_fine 0.8"}.get(key, key)
 
 
 STYLE = {}
 _colours = plt.get_cmap("tab20").colors
-for i, k in enumerate(PEERS + ["vcar:" + v for v in VARIANTS]):
+for i, k in enumerate(PEERS + ["vcar:" + v for v in VARIANTS + ROBUST_ABLATION] + ["filtercluster"]):
     STYLE[k] = dict(color=_colours[i % len(_colours)], marker="os^vD<>ph*XP"[i % 12])
 STYLE["vcar:full"] = dict(color="black", marker="*")  # the complete method stands out
+STYLE["vcar:robust"] = dict(color="crimson", marker="*")  # vcar's default
 
 
 def save(fig, name):
@@ -92,7 +105,7 @@ def pareto(points):
 
 
 def chart_pareto(rows, metric, name, ylabel):
-    base = [r for r in rows if r["failure"] == "none"]
+    base = [r for r in headline(rows) if r["failure"] == "none" and not r["variant"].startswith("robust-")]
     fig, axes = plt.subplots(1, len(RIGS), figsize=(4.2 * len(RIGS), 3.8), sharey=True)
     for ax, rig in zip(axes, RIGS):
         pts = []
@@ -111,17 +124,22 @@ def chart_pareto(rows, metric, name, ylabel):
     return save(fig, name)
 
 
-SWEEP_X = {"dilate": "dilation (px)", "erode": "erosion (px)", "blobs": "false-positive blobs per mask",
+SWEEP_X = {"dilate_diag": "dilation (% of the image diagonal)", "erode_diag": "erosion (% of the image diagonal)",
+           "dilate": "dilation (px)", "erode": "erosion (px)", "blobs": "false-positive blobs per mask",
            "drop": "dropped-mask probability", "swap": "wrong-object probability", "jitter": "mask shift (px)",
            "views": "training views", "tau": "threshold tau (VCAR: tau_coarse = tau_fine)"}
 
 
 def chart_sweep(rows, failure, metric="miou"):
-    sw = [r for r in rows if r["failure"] == failure]
+    diag = failure.endswith("_diag")  # these run on every rig and start from the targets' clean runs
+    pool = rows if diag else headline(rows)
+    sw = [r for r in pool if r["failure"] == failure]
     if not sw:
         return None
     seeds = {r["seed"] for r in sw}
-    zero = [r for r in rows if r["failure"] == "none" and r["seed"] in seeds] if failure not in ("views", "tau") else []
+    methods = {r["key"] for r in sw}
+    zero = [r for r in pool if r["failure"] == "none" and r["seed"] in seeds and r["key"] in methods and
+            r["target"] == "seed" and r["width"] == 160] if failure not in ("views", "tau") else []
     rigs = [rig for rig in RIGS if any(r["rig"] == rig for r in sw)]
     fig, axes = plt.subplots(1, len(rigs), figsize=(4.6 * len(rigs), 3.6), sharey=True, squeeze=False)
     for ax, rig in zip(axes[0], rigs):
@@ -132,7 +150,7 @@ def chart_sweep(rows, failure, metric="miou"):
                 if r["rig"] == rig and r["key"] == key:
                     pts[r["level"]].append(r[metric])
             xs = sorted(pts)
-            ax.plot(xs, [mean(pts[x]) for x in xs], label=label(key), lw=2.2 if key == "vcar:full" else 1.2,
+            ax.plot(xs, [mean(pts[x]) for x in xs], label=label(key), lw=2.2 if key in ("vcar:full", "vcar:robust") else 1.2,
                     ms=4, **STYLE[key])
         ax.set_title(rig)
         ax.set_xlabel(SWEEP_X.get(failure, failure))
@@ -155,14 +173,14 @@ def chart_size(rows):
     a0.set_xscale("log"); a0.set_yscale("log")
     a0.set_xlabel("Gaussians in the scene (object fixed)"); a0.set_ylabel("time without segmenter (s)")
     a0.set_title("total cost vs scene size"); a0.grid(alpha=0.3); a0.legend(fontsize=7)
-    by = group([r for r in sz if r["key"] == "vcar:full"], ["gaussians"])
+    by = group([r for r in sz if r["key"] == "vcar:robust"] or [r for r in sz if r["key"] == "vcar:full"], ["gaussians"])
     xs = sorted(k[0] for k in by)
     for col, lab in [("t_render", "render (all frames)"), ("t_vote", "voting"), ("t_vca", "VCA"),
                      ("t_sss", "SSS (fine round)"), ("t_abr", "ABR")]:
         a1.plot(xs, [max(median(r[col] for r in by[(x,)]), 1e-5) for x in xs], marker="o", ms=4, label=lab)
     a1.set_xscale("log"); a1.set_yscale("log")
     a1.set_xlabel("Gaussians in the scene (object fixed)"); a1.set_ylabel("seconds")
-    a1.set_title("VCAR stages"); a1.grid(alpha=0.3); a1.legend(fontsize=7)
+    a1.set_title("vcar robust stages" if any(r["key"] == "vcar:robust" for r in sz) else "VCAR stages"); a1.grid(alpha=0.3); a1.legend(fontsize=7)
     return save(fig, "scaling.svg")
 
 
@@ -171,7 +189,7 @@ def fmt(x, d=3):
 
 
 def ablation_md(rows):
-    base = [r for r in rows if r["failure"] == "none" and r["method"] == "vcar"]
+    base = [r for r in headline(rows) if r["failure"] == "none" and r["method"] == "vcar"]
     g = group(base, ["variant", "rig"])
     nseeds = len({r["seed"] for r in base})
     out = ["# VCAR ablation on the synthetic world", "",
@@ -197,8 +215,12 @@ def ablation_md(rows):
           [("miou", "mIoU"), ("macc", "mAcc")], "mIoU / mAcc (alpha > 0.5)")
     table(["coarse", "sss", "abr", "full"], ["coarse", "+SSS", "+ABR", "full (SSS + ABR)"],
           [("boundary_iou", "bIoU"), ("f1_3d", "3D F1")], "Boundary IoU / 3D selection F1")
-    table(["full", "occlusion", "gapdir"], ["full", "full + occlusion-aware", "full, gap-directed views"],
+    table(["full", "occlusion", "gapdir", "robust"],
+          ["full", "full + occlusion-aware", "full, gap-directed views", "robust (vcar's default)"],
           [("miou", "mIoU"), ("f1_3d", "3D F1")], "Beyond the paper")
+    table(["robust"] + ROBUST_ABLATION, ["robust"] + [label("vcar:" + v) for v in ROBUST_ABLATION],
+          [("miou", "mIoU"), ("boundary_iou", "bIoU"), ("f1_3d", "3D F1")],
+          "The robust preset, one mechanism changed at a time (docs/robust.md)")
     path = os.path.join(ROOT, "docs", "results", "ablation.md")
     with open(path, "w") as f:
         f.write("\n".join(out))
@@ -208,6 +230,7 @@ def ablation_md(rows):
 def summary_md(rows):
     """Numbers for docs/results.md: the headline grid and the sweeps at each level."""
     out = ["# Evidence summary (generated)", ""]
+    all_rows, rows = rows, headline(rows)
     base = [r for r in rows if r["failure"] == "none"]
     out += ["## Failure-free grid (accuracy: mean over seeds; t_method: median over seeds)", "",
             "| method | rig | mIoU | mAcc | mIoU@0.1 | bIoU | bF1 | 3D F1 | 3D prec | 3D rec | t_method s | frames |",
@@ -256,10 +279,50 @@ def summary_md(rows):
                        ["t_render", "t_vote", "t_vca", "t_sss", "t_abr"]) + "; %d / %s / %s (%d runs)" % (
                        median(r["n_coarse"] for r in rs), fmt(mean(r["miou"] for r in rs)),
                        fmt(median(r["peak_mib"] for r in rs), 0), len(rs))))
+    out += beyond_md(all_rows)
     path = os.path.join(ROOT, "docs", "results", "summary.md")
     with open(path, "w") as f:
         f.write("\n".join(out) + "\n")
     return path
+
+
+def beyond_md(rows):
+    """Tables of the sweeps beyond the paper's suite: every target shape, failures by share of the diagonal,
+    >= 640 px images and trained Gaussians; each with vcar robust, the paper's VCAR and the best peer."""
+    out = []
+    peers = set(PEERS + ["filtercluster"])
+
+    def block(title, rs, cols):
+        out.extend(["", "## " + title, "",
+                    "| case | rig | robust mIoU / bIoU / 3D F1 | paper (full) | best peer by mIoU | robust / paper t_method |",
+                    "|---|---|---|---|---|---|"])
+        for case_key, cases in sorted(group(rs, cols + ["rig"]).items(),
+                                      key=lambda kv: (kv[0][:-1], RIGS.index(kv[0][-1]) if kv[0][-1] in RIGS else 9)):
+            g = group(cases, ["key"])
+            def trio(k):
+                c = g.get((k,), [])
+                return "%s / %s / %s" % tuple(fmt(mean(r[m] for r in c)) for m in ["miou", "boundary_iou", "f1_3d"]) if c else "-"
+            best = max(((mean(r["miou"] for r in v), k[0]) for k, v in g.items() if k[0] in peers), default=None)
+            ratio = math.nan
+            if g.get(("vcar:robust",)) and g.get(("vcar:full",)):
+                ratio = median(r["t_method"] for r in g[("vcar:robust",)]) / median(r["t_method"] for r in g[("vcar:full",)])
+            out.append("| %s | %s | %s | %s | %s | %s |" % (" ".join(str(x) if not isinstance(x, float) else "%g" % x for x in case_key[:-1]),
+                       case_key[-1], trio("vcar:robust"), trio("vcar:full"),
+                       "%s %s" % (best[1], fmt(best[0])) if best else "-", fmt(ratio, 2)))
+
+    t = [r for r in rows if r["failure"] == "none" and r["target"] in TARGETS and r["width"] == 160]
+    if t:
+        block("Every target shape (160 x 120, failure-free; mean over seeds)", t, ["target"])
+    d = [r for r in rows if r["failure"].endswith("_diag")]
+    if d:
+        block("Masks eroded / dilated by a share of the image diagonal (%, 160 x 120)", d, ["failure", "level"])
+    h = [r for r in rows if r["width"] >= 640]
+    if h:
+        block("640 x 480 images (failure-free)", h, ["target"])
+    n = [r for r in rows if r["target"] == "donut"]
+    if n:
+        block("Trained Gaussians (tests/data/donut.ply copies, 256 x 192; erode level in px)", n, ["failure", "level"])
+    return out
 
 
 def main():
@@ -269,7 +332,7 @@ def main():
     os.makedirs(os.path.join(ROOT, "docs", "results"), exist_ok=True)
     written = [chart_pareto(rows, "miou", "time_vs_miou.svg", "mIoU (alpha > 0.5)"),
                chart_pareto(rows, "boundary_iou", "time_vs_boundary_iou.svg", "boundary IoU")]
-    for failure in ["dilate", "erode", "blobs", "drop", "swap", "jitter", "views", "tau"]:
+    for failure in ["dilate", "erode", "blobs", "drop", "swap", "jitter", "views", "tau", "erode_diag", "dilate_diag"]:
         written.append(chart_sweep(rows, failure))
     written += [chart_size(rows), ablation_md(rows), summary_md(rows)]
     for w in written:

@@ -11,6 +11,7 @@ namespace vcar::evidence {
 // Stage times are NaN when a method has no such stage (written as an empty CSV field).
 struct RunRecord {
   std::string method, variant, rig, preset, failure;
+  std::string target = "seed";  // the target's shape: seed (drawn), sphere, torus, cylinder, box, donut (trained)
   int seed = 0;
   std::size_t gaussians = 0, object_gaussians = 0;
   double level = 0;
@@ -34,7 +35,7 @@ inline const char* csv_header() {
   return "method,variant,rig,preset,seed,gaussians,object_gaussians,failure,level,width,height,n_train,n_eval,"
          "miou,macc,miou_01,macc_01,boundary_iou,boundary_f1,trimap_iou,f1_3d,precision_3d,recall_3d,selected,"
          "t_render,t_segment,t_vote,t_vca,t_sss,t_abr,t_method,time_s,frames_segmented,peak_mib,peak_delta_mib,"
-         "n_coarse,n_fine,abr_flagged,abr_compressed,valid_cameras,max_gap_deg,sss_triggered";
+         "n_coarse,n_fine,abr_flagged,abr_compressed,valid_cameras,max_gap_deg,sss_triggered,target";
 }
 
 inline std::string fmt(double v, const char* f = "%.6g") {
@@ -58,7 +59,7 @@ inline std::string csv_row(const RunRecord& r) {
   num(r.t_method); num(r.time_s); add(std::to_string(r.frames_segmented));
   add(fmt(r.peak_mib, "%.1f")); add(fmt(r.peak_delta_mib, "%.1f"));
   opt(r.n_coarse); opt(r.n_fine); opt(r.abr_flagged); opt(r.abr_compressed); opt(r.valid_cameras);
-  num(r.max_gap_deg); opt(r.sss_triggered);
+  num(r.max_gap_deg); opt(r.sss_triggered); add(r.target);
   return s;
 }
 

@@ -15,6 +15,7 @@
 #include "vcar/core/parallel.hpp"
 #include "vcar/io/atomic_file.hpp"
 #include "vcar/io/json_file.hpp"
+#include "vcar/io/params_text.hpp"
 #include "vcar/io/ply.hpp"
 #include "vcar/io/scene_file.hpp"
 #include "vcar/io/selection_identity.hpp"
@@ -76,18 +77,16 @@ void ProgressLine::done() {
 
 // ---- files ---------------------------------------------------------------------------------
 nlohmann::json read_json(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw CliError(exit_bad_input, "cannot open the file", file.string());
   try {
-    return nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& e) {
-    throw CliError(exit_bad_input, std::string("not valid JSON: ") + e.what(), file.string());
+    return io::read_json_file(file);
+  } catch (const Error& e) {
+    throw CliError(exit_bad_input, e.what());
   }
 }
 
 void write_json(const std::filesystem::path& file, const nlohmann::json& j) {
   try {
-    io::atomic_write(file, [&](std::ostream& out) { out << j.dump(1) << '\n'; });
+    io::write_json_file(file, j);
   } catch (const Error& e) {
     throw CliError(exit_output, e.what());
   }
@@ -321,39 +320,12 @@ VcarParams make_params(const std::string& preset, const std::vector<std::string>
   } catch (const Error&) {
     throw CliError(exit_usage, "unknown preset '" + preset + "'; valid: robust, nvos, lerf, reference_code", "--preset");
   }
-  for (const std::string& s : sets) p.set(s);  // vcar::Error naming the key -> exit 2
+  for (const std::string& s : sets) io::set_parameter(p, s);  // vcar::Error naming the key -> exit 2
   p.validate();
   return p;
 }
 
-namespace {
-template <class T>
-nlohmann::json field_json(const T& v) {
-  if constexpr (std::is_same_v<T, float>) {
-    return io::json_float(v);  // 0.7, not 0.699999988
-  } else if constexpr (std::is_same_v<T, bool> || std::is_arithmetic_v<T>) {
-    return v;
-  } else if constexpr (std::is_same_v<T, Eigen::Vector3f>) {
-    return {io::json_float(v[0]), io::json_float(v[1]), io::json_float(v[2])};
-  } else if constexpr (std::is_enum_v<T>) {
-    // Enum names as --set accepts them.
-    if constexpr (std::is_same_v<T, SpiralVariant> || std::is_same_v<T, AbrVariant>)
-      return static_cast<int>(v) == 0 ? "Paper" : "ReferenceCode";
-    else if constexpr (std::is_same_v<T, SampledIntrinsics>)
-      return v == SampledIntrinsics::ReferenceView ? "ReferenceView" : "ReferenceCode45Fov";
-    else
-      return static_cast<int>(v);
-  } else {
-    return nullptr;
-  }
-}
-}  // namespace
-
-nlohmann::json params_json(const VcarParams& p) {
-  nlohmann::json j = nlohmann::json::object();
-  VcarParams::for_each_field(p, [&](const char* name, const auto& field) { j[name] = field_json(field); });
-  return j;
-}
+nlohmann::json params_json(const VcarParams& p) { return io::params_json(p); }
 
 double peak_rss_mib() {
   rusage ru{};

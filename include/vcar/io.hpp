@@ -20,5 +20,6 @@
 #include "vcar/io/cameras.hpp"
 #include "vcar/io/image_file.hpp"
 #include "vcar/io/json_file.hpp"
+#include "vcar/io/params_text.hpp"
 #include "vcar/io/mask_folder_segmenter.hpp"
 #include "vcar/io/external_segmenter.hpp"

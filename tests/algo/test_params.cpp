@@ -68,42 +68,6 @@ TEST_CASE("validate names the parameter at fault") {
   p = {}; p.phi_e_deg = 95.f;  CHECK(where_of(p) == "phi_e_deg");
 }
 
-TEST_CASE("set(key, value) parses every kind of field and rejects unknown keys") {
-  VcarParams p;
-  p.set("tau_fine", "0.65");
-  CHECK(p.tau_fine == Approx(0.65));
-  p.set("K=500");
-  CHECK(p.K == 500);
-  p.set("enable_sss", "false");
-  CHECK_FALSE(p.enable_sss);
-  p.set("spiral_variant", "ReferenceCode");
-  CHECK(p.spiral_variant == vcar::SpiralVariant::ReferenceCode);
-  p.set("sampled_intrinsics", "ReferenceCode45Fov");
-  CHECK(p.sampled_intrinsics == vcar::SampledIntrinsics::ReferenceCode45Fov);
-  p.set("background", "1,0.5,0");
-  CHECK(p.background == Eigen::Vector3f(1, 0.5f, 0));
-  CHECK_THROWS_AS(p.set("K", "12x"), vcar::Error);
-  CHECK_THROWS_AS(p.set("tau_fine", ""), vcar::Error);
-  CHECK_THROWS_AS(p.set("enable_abr", "maybe"), vcar::Error);
-  CHECK_THROWS_AS(p.set("spiral_variant", "Other"), vcar::Error);
-  CHECK_THROWS_AS(p.set("background", "1,2"), vcar::Error);
-  try {
-    p.set("tau", "0.5");
-    FAIL("expected an error");
-  } catch (const vcar::Error& e) {
-    const std::string msg = e.what();
-    CHECK(msg.find("tau_coarse") != std::string::npos);  // lists the valid keys
-    CHECK(msg.find("f_min") != std::string::npos);
-  }
-  // Every field is reachable by its own name, and names are unique.
-  std::set<std::string> names;
-  std::size_t count = 0;
-  VcarParams::for_each_field(p, [&](const char* name, auto&) { names.insert(name); ++count; });
-  CHECK(names.size() == count);
-  CHECK(names.count("boundary_samples") == 1);
-  CHECK(names.count("depth_tolerance") == 1);
-}
-
 TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond the paper; the paper presets none") {
   const auto r = VcarParams::robust();
   CHECK(r.edge_band > 0.f);

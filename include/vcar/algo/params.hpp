@@ -1,17 +1,17 @@
 #pragma once
 // Every parameter of VCAR (paper Sec. 4.2, supplementary A.1, conventions §5) with its paper
 // name, plus the switches that reach the released reference code (conventions §7) and the
-// extensions beyond the paper (off by default).
-#include <cerrno>
+// extensions beyond the paper (off in the paper presets; VcarParams::robust() is the default).
+// Text forms (`--set key=value`, JSON) live in io/params_text.hpp.
 #include <cmath>
 #include <cstdlib>
-#include <initializer_list>
 #include <string>
 #include <string_view>
 #include <utility>
 
 #include <Eigen/Core>
 
+#include "vcar/algo/boundary_refinement.hpp"
 #include "vcar/core/error.hpp"
 
 namespace vcar {
@@ -141,6 +141,18 @@ struct VcarParams {
     throw Error("unknown preset '" + std::string(name) + "'; valid: robust, nvos, lerf, reference_code", "preset");
   }
 
+  // ABR's parameters (Eq. 9-14, B), derived: the one place they are read from VcarParams.
+  AbrParams abr() const {
+    AbrParams a;
+    a.sigma_c = sigma_c;
+    a.rho = rho;
+    a.f_min = f_min;
+    a.boundary_samples = boundary_samples;
+    a.reference_code_rules = abr_variant == AbrVariant::ReferenceCode;
+    if (!abr_lowpass) a.projection.eps2d = 0.f;  // the Gaussian's own footprint
+    return a;
+  }
+
   // True when a mechanism beyond the paper changes the vote (RobustVoting, Eq. R1-R4).
   bool robust_vote() const { return edge_band > 0.f || fine_occlusion || coarse_occlusion || keep_unseen; }
 
@@ -164,34 +176,6 @@ struct VcarParams {
     f("keep_unseen", p.keep_unseen); f("keep_undecided", p.keep_undecided); f("kappa", p.kappa); f("abr_lowpass", p.abr_lowpass);
   }
 
-  // Comma-separated list of the field names (for error messages and --help).
-  static std::string keys() {
-    std::string out;
-    VcarParams p;
-    for_each_field(p, [&](const char* name, auto&) { out += (out.empty() ? "" : ", ") + std::string(name); });
-    return out;
-  }
-
-  // `--set key=value`: key is a field name; value as the field's type (numbers, true/false/1/0,
-  // enum names Paper/ReferenceCode/ReferenceView/ReferenceCode45Fov, colours "r,g,b").
-  void set(std::string_view key, std::string_view value) {
-    bool found = false;
-    for_each_field(*this, [&](const char* name, auto& field) {
-      if (key != name) return;
-      found = true;
-      parse(std::string(name), std::string(value), field);
-    });
-    if (!found)
-      throw Error("unknown parameter '" + std::string(key) + "'; valid keys: " + keys(), "--set");
-  }
-  // "key=value" form of set().
-  void set(std::string_view assignment) {
-    const auto eq = assignment.find('=');
-    if (eq == std::string_view::npos)
-      throw Error("expected key=value, got '" + std::string(assignment) + "'", "--set");
-    set(assignment.substr(0, eq), assignment.substr(eq + 1));
-  }
-
   // Throws vcar::Error naming the first parameter outside its range.
   void validate() const {
     auto bad = [](const char* name, const std::string& why) { throw Error(why, name); };
@@ -201,7 +185,6 @@ struct VcarParams {
     unit("tau_coarse", tau_coarse);
     unit("tau_fine", tau_fine);
     unit("rho_min", rho_min);
-    if (!(rho >= 0.f && rho < 1.f)) bad("rho", "must be in [0, 1) (the gate is ratio > rho), got " + std::to_string(rho));
     if (!(eta > 0.f && std::isfinite(eta))) bad("eta", "must be positive");
     if (K < 1) bad("K", "must be >= 1, got " + std::to_string(K));
     if (!(Delta_th_deg >= 0.f && Delta_th_deg <= 180.f)) bad("Delta_th_deg", "must be in [0, 180]");
@@ -209,9 +192,14 @@ struct VcarParams {
     if (S2 < 1) bad("S2", "must be >= 1, got " + std::to_string(S2));
     if (!(std::abs(phi_s_deg) <= 90.f)) bad("phi_s_deg", "must be in [-90, 90]");
     if (!(std::abs(phi_e_deg) <= 90.f)) bad("phi_e_deg", "must be in [-90, 90]");
-    if (!(sigma_c > 0.f && std::isfinite(sigma_c))) bad("sigma_c", "must be positive");
-    if (!(f_min > 0.f && f_min <= 1.f)) bad("f_min", "must be in (0, 1], got " + std::to_string(f_min));
-    if (boundary_samples < 2) bad("boundary_samples", "must be >= 2");
+    try {  // sigma_c, rho, f_min, boundary_samples: AbrParams owns their ranges
+      abr().validate();
+    } catch (const Error& e) {
+      const std::string prefix = "AbrParams.";
+      const std::string key = e.where().rfind(prefix, 0) == 0 ? e.where().substr(prefix.size()) : e.where();
+      const std::string what = e.what();
+      bad(key.c_str(), what.substr(std::min(what.size(), e.where().size() + 2)));
+    }
     if (!(depth_tolerance >= 0.f && std::isfinite(depth_tolerance))) bad("depth_tolerance", "must be >= 0");
     if (gap_directed_views < 1) bad("gap_directed_views", "must be >= 1");
     if (!(gap_directed_cone_deg >= 0.f && gap_directed_cone_deg < 180.f))
@@ -225,59 +213,6 @@ struct VcarParams {
     if (!(edge_band >= 0.f && edge_band <= 1.f)) bad("edge_band", "must be in [0, 1] (0 = off), got " + std::to_string(edge_band));
   }
 
-private:
-  static void parse(const std::string& key, const std::string& s, float& out) {
-    errno = 0;
-    char* end = nullptr;
-    const float v = std::strtof(s.c_str(), &end);
-    if (s.empty() || end != s.c_str() + s.size() || errno != 0 || !std::isfinite(v))
-      throw Error("expected a number, got '" + s + "'", key);
-    out = v;
-  }
-  static void parse(const std::string& key, const std::string& s, int& out) {
-    errno = 0;
-    char* end = nullptr;
-    const long v = std::strtol(s.c_str(), &end, 10);
-    if (s.empty() || end != s.c_str() + s.size() || errno != 0 || v < -2147483647L || v > 2147483647L)
-      throw Error("expected an integer, got '" + s + "'", key);
-    out = static_cast<int>(v);
-  }
-  static void parse(const std::string& key, const std::string& s, bool& out) {
-    if (s == "true" || s == "1" || s == "on") out = true;
-    else if (s == "false" || s == "0" || s == "off") out = false;
-    else throw Error("expected true/false, got '" + s + "'", key);
-  }
-  static void parse(const std::string& key, const std::string& s, Eigen::Vector3f& out) {
-    Eigen::Vector3f v;
-    std::size_t start = 0;
-    for (int c = 0; c < 3; ++c) {
-      const std::size_t comma = s.find(',', start);
-      if ((c < 2) == (comma == std::string::npos)) throw Error("expected r,g,b, got '" + s + "'", key);
-      parse(key, s.substr(start, c < 2 ? comma - start : std::string::npos), v[c]);
-      start = comma + 1;
-    }
-    out = v;
-  }
-  template <class E>
-  static void parse_enum(const std::string& key, const std::string& s, E& out,
-                         std::initializer_list<std::pair<const char*, E>> names) {
-    std::string valid;
-    for (const auto& [n, e] : names) {
-      if (s == n) { out = e; return; }
-      valid += (valid.empty() ? "" : ", ") + std::string(n);
-    }
-    throw Error("unknown value '" + s + "'; valid: " + valid, key);
-  }
-  static void parse(const std::string& key, const std::string& s, SpiralVariant& out) {
-    parse_enum(key, s, out, {{"Paper", SpiralVariant::Paper}, {"ReferenceCode", SpiralVariant::ReferenceCode}});
-  }
-  static void parse(const std::string& key, const std::string& s, SampledIntrinsics& out) {
-    parse_enum(key, s, out, {{"ReferenceView", SampledIntrinsics::ReferenceView},
-                             {"ReferenceCode45Fov", SampledIntrinsics::ReferenceCode45Fov}});
-  }
-  static void parse(const std::string& key, const std::string& s, AbrVariant& out) {
-    parse_enum(key, s, out, {{"Paper", AbrVariant::Paper}, {"ReferenceCode", AbrVariant::ReferenceCode}});
-  }
 };
 
 }  // namespace vcar

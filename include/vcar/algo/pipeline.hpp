@@ -171,17 +171,6 @@ double content_fraction(const GaussianScene& scene, const std::vector<Index>& su
   return out.alpha.data.empty() ? 0.0 : static_cast<double>(covered) / static_cast<double>(out.alpha.data.size());
 }
 
-inline AbrParams abr_params(const VcarParams& p) {
-  AbrParams a;
-  a.sigma_c = p.sigma_c;
-  a.rho = p.rho;
-  a.f_min = p.f_min;
-  a.boundary_samples = p.boundary_samples;
-  a.reference_code_rules = p.abr_variant == AbrVariant::ReferenceCode;
-  if (!p.abr_lowpass) a.projection.eps2d = 0.f;  // the Gaussian's own footprint
-  return a;
-}
-
 // The vote of one round: the paper's VisibilityVoting (Eq. 1-3, and the occlusion_aware
 // option), or RobustVoting when a mechanism beyond the paper is on (docs/robust.md).
 class RoundVote {
@@ -387,7 +376,7 @@ SegmentationResult segment(const GaussianScene& scene, const std::vector<Camera>
   if (params.enable_abr) {
     stage("abr");
     auto ta = Clock::now();
-    BoundaryRefinement abr(scene, selected, detail::abr_params(params));
+    BoundaryRefinement abr(scene, selected, params.abr());
     Mask scratch;
     for (std::size_t j = 0; j < M; ++j) {
       if (!train_masks[j]) continue;

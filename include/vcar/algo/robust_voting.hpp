@@ -132,9 +132,15 @@ public:
   // Eq. R2 (Eq. 3 at level 0).
   float ratio(std::size_t k) const {
     float R = static_cast<float>(foreground(k)) / static_cast<float>(std::max<std::uint16_t>(visible(k), 1));
+    // While R is the plain ratio of counts equal to this level's, the shrunk value equals R
+    // exactly ((F + kappa F/V) / (V + kappa) = F/V): keep R bit for bit instead of rounding it
+    // again (FMA or not), so Eq. 3 comes out identical whenever the mechanisms add nothing.
+    bool plain = true;
     for (int level = 1; level <= 2; ++level) {
+      if (plain && visible(k, level) == visible(k) && foreground(k, level) == foreground(k)) continue;
+      plain = false;
       const float V = static_cast<float>(visible(k, level)), F = static_cast<float>(foreground(k, level));
-      if (V > 0.f || kappa_ > 0.f) R = V + kappa_ > 0.f ? (F + kappa_ * R) / (V + kappa_) : R;
+      if (V + kappa_ > 0.f) R = (F + kappa_ * R) / (V + kappa_);
     }
     return R;
   }
