@@ -1,7 +1,7 @@
 // The evidence driver: methods x VCAR variants x rigs x scene sizes x oracle failure levels x
 // seeds on the synthetic world, one tidy CSV row per run plus a JSON summary.
 //
-//   bench_evidence [--quick | --full] [--out DIR] [--seeds N] [--max-size N] [--only SWEEP]
+//   bench_evidence [--quick | --full] [--out DIR] [--seeds N] [--first-seed N] [--max-size N] [--only SWEEP]
 //                  [--set key=value]... (VcarParams, every VCAR run) [--methods a,b] (keep only these)
 //
 // Evaluation (CONVENTIONS 6): the selected Gaussians alone (refined scales for VCAR, decomposed
@@ -129,6 +129,7 @@ struct Options {
   bool quick = false;
   std::filesystem::path out = "evidence-out";
   int seeds = 0;
+  int first_seed = 1;                // --first-seed N: skip the seeds before N (resuming a run)
   std::size_t max_size = 0;
   std::string only;
   std::vector<std::string> set;      // --set key=value, applied to every VCAR run
@@ -557,6 +558,7 @@ int main(int argc, char** argv) {
     else if (a == "--full") o.quick = false;
     else if (a == "--out") o.out = value();
     else if (a == "--seeds") o.seeds = std::stoi(value());
+    else if (a == "--first-seed") o.first_seed = std::stoi(value());
     else if (a == "--max-size") o.max_size = std::stoul(value());
     else if (a == "--only") o.only = value();
     else if (a == "--set") o.set.push_back(value());
@@ -570,7 +572,7 @@ int main(int argc, char** argv) {
       }
     }
     else {
-      std::fprintf(stderr, "usage: %s [--quick|--full] [--out DIR] [--seeds N] [--max-size N] "
+      std::fprintf(stderr, "usage: %s [--quick|--full] [--out DIR] [--seeds N] [--first-seed N] [--max-size N] "
                            "[--only grid|targets|diag|hires|donut|sweeps|dilate|erode|blobs|drop|swap|jitter|tau|views|size] [--set key=value]... "
                            "[--methods naive,vcar:full,...] [--rigs forward,...] [--targets torus,...]\n", argv[0]);
       return a == "--help" || a == "-h" ? 0 : 2;
@@ -583,7 +585,9 @@ int main(int argc, char** argv) {
     auto listed = [](const std::vector<std::string>& l, const std::string& x) {
       return l.empty() || std::find(l.begin(), l.end(), x) != l.end();
     };
-    std::erase_if(p, [&](const Experiment& e) { return !listed(o.rigs, e.rig) || !listed(o.targets, e.target); });
+    std::erase_if(p, [&](const Experiment& e) {
+      return !listed(o.rigs, e.rig) || !listed(o.targets, e.target) || e.seed < o.first_seed;
+    });
     if (!o.methods.empty())
       for (Experiment& e : p)
         std::erase_if(e.methods, [&](const std::string& m) { return std::find(o.methods.begin(), o.methods.end(), m) == o.methods.end(); });

@@ -4,14 +4,7 @@
 
 #include "vcar/algo/robust_sphere.hpp"
 
-namespace {
-vcar::GaussianScene scene_of(const std::vector<Eigen::Vector3f>& mus) {
-  vcar::GaussianScene s;
-  s.resize(mus.size());
-  for (std::size_t i = 0; i < mus.size(); ++i) s.set(i, mus[i], Eigen::Vector3f::Zero(), {1, 0, 0, 0}, 0.f);
-  return s;
-}
-}  // namespace
+#include "point_scene.hpp"
 
 TEST_CASE("Eq. 4 by hand: 3-sigma rejection of a planted outlier") {
   // Four points of a unit square around (1, 1, 0) and an outlier; with 4 inliers one outlier at

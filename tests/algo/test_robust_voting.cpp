@@ -5,6 +5,8 @@
 #include "vcar/algo/robust_voting.hpp"
 #include "vcar/algo/visibility_voting.hpp"
 
+#include "point_scene.hpp"
+
 using vcar::Camera;
 using vcar::ImageF;
 using vcar::Index;
@@ -17,12 +19,6 @@ Camera cam20(const char* name) {
   c.name = name;
   c.width = 20; c.height = 20; c.fx = 10; c.fy = 10; c.cx = 10; c.cy = 10;
   return c;
-}
-vcar::GaussianScene scene_of(const std::vector<Eigen::Vector3f>& mus) {
-  vcar::GaussianScene s;
-  s.resize(mus.size());
-  for (std::size_t i = 0; i < mus.size(); ++i) s.set(i, mus[i], Eigen::Vector3f::Zero(), {1, 0, 0, 0}, 0.f);
-  return s;
 }
 Mask square(int x0, int y0, int x1, int y1) {
   Mask m(20, 20, 1);

@@ -5,6 +5,8 @@
 
 #include "vcar/algo/visibility_voting.hpp"
 
+#include "point_scene.hpp"
+
 using vcar::Camera;
 using vcar::Index;
 using vcar::Mask;
@@ -19,12 +21,6 @@ Camera unit_camera(const char* name) {
   return c;
 }
 
-vcar::GaussianScene scene_of(const std::vector<Eigen::Vector3f>& mus) {
-  vcar::GaussianScene s;
-  s.resize(mus.size());
-  for (std::size_t i = 0; i < mus.size(); ++i) s.set(i, mus[i], Eigen::Vector3f::Zero(), {1, 0, 0, 0}, 0.f);
-  return s;
-}
 
 vcar::GaussianScene random_scene(std::size_t n, unsigned seed) {
   std::mt19937 rng(seed);

@@ -1,12 +1,33 @@
 #pragma once
 // Eq. 1 for a SIMD batch of Gaussian means (SoA x, y, z): the one projection that voting and
 // the valid-camera filter (A.1) share, so both apply exactly the same visibility test.
+#include <array>
 #include <cstdint>
+#include <string>
+#include <vector>
 
 #include "vcar/core/camera.hpp"
+#include "vcar/core/error.hpp"
+#include "vcar/core/gaussian_scene.hpp"
 #include "vcar/core/simd.hpp"
 
 namespace vcar::detail {
+
+// The means of `candidates` (scene indices, any order) as SoA columns, for a voter that
+// projects a subset of the scene; an index outside the scene is an error.
+inline std::array<std::vector<float>, 3> candidate_means(const GaussianScene& scene,
+                                                         const std::vector<Index>& candidates) {
+  std::array<std::vector<float>, 3> out;
+  for (int d = 0; d < 3; ++d) {
+    out[d].resize(candidates.size());
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+      if (candidates[k] >= scene.size())
+        throw Error("candidate index " + std::to_string(candidates[k]) + " out of range", "voting");
+      out[d][k] = scene.mean[d][candidates[k]];
+    }
+  }
+  return out;
+}
 
 // A camera reduced to what the projection of means needs.
 struct MeanProjection {

@@ -167,14 +167,7 @@ public:
   // The Gaussians `candidates` of `scene` (scene indices, any order); their means are copied.
   MultiObjectVoting(const GaussianScene& scene, std::vector<Index> candidates, int n_objects)
       : candidates_(std::move(candidates)) {
-    for (int d = 0; d < 3; ++d) {
-      own_[d].resize(candidates_.size());
-      for (std::size_t k = 0; k < candidates_.size(); ++k) {
-        if (candidates_[k] >= scene.size())
-          throw Error("candidate index " + std::to_string(candidates_[k]) + " out of range", "voting");
-        own_[d][k] = scene.mean[d][candidates_[k]];
-      }
-    }
+    own_ = detail::candidate_means(scene, candidates_);
     init(own_[0].data(), own_[1].data(), own_[2].data(), candidates_.size(), n_objects);
   }
   // Raw SoA means (referenced, not copied); candidate k has scene index k.
