@@ -4,9 +4,10 @@
 //   example_embed_cpu                                  synthetic scene, oracle masks
 //   example_embed_cpu object.ply                       the PLY's Gaussians (e.g. tests/data/donut.ply)
 //                                                      placed in a synthetic scene, oracle masks
-//   example_embed_cpu scene.ply cameras masks/ [ref]   your scene: cameras (COLMAP folder,
+//   example_embed_cpu scene.ply cameras masks/ [view] your scene: cameras (COLMAP folder,
 //                                                      cameras.json or transforms.json) and one
-//                                                      mask per view in masks/ (named after the view)
+//                                                      mask per view in masks/ (named after the view);
+//                                                      [view]: the prompt's view, by name or number (0)
 // Options: -o FILE (default selection.ply), -t THREADS.
 // Writes the selected Gaussians, with the refined scales of ABR, as an Inria PLY.
 #include <algorithm>
@@ -115,7 +116,14 @@ int main(int argc, char** argv) try {
     // Precomputed masks cover the training views only: the spiral's sampled views (SSS) get
     // "no mask" and vote as no evidence. A live segmenter (SAM 2 on the rendered frames) fills them.
     vcar::io::MaskFolderSegmenter masks(args[2]);
-    const std::size_t ref = args.size() > 3 ? std::stoul(args[3]) : 0;
+    // The reference view: its name (as in the camera file), or its position among the cameras.
+    std::size_t ref = 0;
+    if (args.size() > 3) {
+      const auto named = std::find_if(cameras.begin(), cameras.end(), [&](const vcar::Camera& c) { return c.name == args[3]; });
+      if (named != cameras.end()) ref = static_cast<std::size_t>(named - cameras.begin());
+      else if (!args[3].empty() && args[3].find_first_not_of("0123456789") == std::string::npos) ref = std::stoul(args[3]);
+      else throw vcar::Error("no view named '" + args[3] + "' (give a view name or a number)", "reference view");
+    }
     return run(scene, cameras, ref, renderer, masks, out).indices.empty() ? 2 : 0;
   }
   if (args.size() == 2) throw vcar::Error("give cameras and a mask folder, or only the PLY", "arguments");

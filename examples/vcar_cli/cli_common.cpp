@@ -44,27 +44,49 @@ void install_signal_handlers() {
 ProgressLine::ProgressLine(bool quiet) : active_(!quiet && ::isatty(STDERR_FILENO)) {}
 ProgressLine::~ProgressLine() { done(); }
 
+std::string ProgressLine::format(std::string_view stage, std::size_t done, std::size_t total, const char* unit,
+                                 double elapsed_s, double eta_s) {
+  char buf[200];
+  int n = std::snprintf(buf, sizeof buf, "%-.*s", static_cast<int>(stage.size()), stage.data());
+  if (total > 0) n += std::snprintf(buf + n, sizeof buf - static_cast<std::size_t>(n), ": %s %zu/%zu", unit, done, total);
+  n += std::snprintf(buf + n, sizeof buf - static_cast<std::size_t>(n), "  %.1f s", elapsed_s);
+  if (eta_s >= 0) std::snprintf(buf + n, sizeof buf - static_cast<std::size_t>(n), ", ~%.0f s left", eta_s);
+  return buf;
+}
+
+void ProgressLine::print(const std::string& text) {
+  std::fprintf(stderr, "\r\033[K[vcar] %s", text.c_str());
+  std::fflush(stderr);
+  dirty_ = true;
+}
+
 bool ProgressLine::operator()(const Progress& p) {
   if (active_) {
-    char buf[160];
-    if (p.views > 0)
-      std::snprintf(buf, sizeof buf, "\r\033[K[vcar] %-18.*s view %zu/%zu  %7.1f s",
-                    static_cast<int>(p.stage.size()), p.stage.data(), p.view, p.views, p.elapsed_s);
-    else
-      std::snprintf(buf, sizeof buf, "\r\033[K[vcar] %-18.*s %7.1f s",
-                    static_cast<int>(p.stage.size()), p.stage.data(), p.elapsed_s);
-    std::fputs(buf, stderr);
-    std::fflush(stderr);
-    dirty_ = true;
+    const double now = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    if (p.stage != stage_) {
+      stage_ = std::string(p.stage);
+      stage_start_s_ = now;
+    }
+    double eta = -1;
+    if (p.views > 0 && p.view > 0) eta = (now - stage_start_s_) / static_cast<double>(p.view) * static_cast<double>(p.views - p.view);
+    print(format(p.stage, p.view, p.views, "view", now, eta));
   }
   return !interrupted().load();
 }
 
-void ProgressLine::message(const std::string& line) {
+void ProgressLine::external(const io::ExternalProgress& p) {
   if (!active_) return;
-  std::fprintf(stderr, "\r\033[K[vcar] %s", line.c_str());
-  std::fflush(stderr);
-  dirty_ = true;
+  const double now = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  const std::string stage = "segmenter round " + std::to_string(p.round) +
+                            (p.phase == io::ExternalProgress::Phase::rendering ? ", rendering" : ", running");
+  double eta = -1;
+  if (p.done > 0) eta = p.elapsed_s / static_cast<double>(p.done) * static_cast<double>(p.frames - std::min(p.done, p.frames));
+  print(format(stage, p.phase == io::ExternalProgress::Phase::rendering ? p.done + 1 : p.done, p.frames,
+               p.phase == io::ExternalProgress::Phase::rendering ? "frame" : "masks written", now, eta));
+}
+
+void ProgressLine::message(const std::string& line) {
+  if (active_) print(line);
 }
 
 void ProgressLine::done() {
@@ -98,6 +120,24 @@ void make_output_dir(const std::filesystem::path& dir) {
   if (ec || !std::filesystem::is_directory(dir))
     throw CliError(exit_output, "cannot create the output directory" + (ec ? ": " + ec.message() : ""),
                    dir.string());
+}
+
+OutputDir::OutputDir(std::filesystem::path dir) : dir_(std::move(dir)) {
+  std::error_code ec;
+  for (std::filesystem::path p = std::filesystem::absolute(dir_, ec); !p.empty() && !std::filesystem::exists(p, ec);
+       p = p.parent_path()) {
+    created_.insert(created_.begin(), p);
+    if (p == p.parent_path()) break;
+  }
+  make_output_dir(dir_);
+}
+
+OutputDir::~OutputDir() {
+  if (committed_) return;
+  std::error_code ec;
+  std::filesystem::remove(dir_ / "requests", ec);  // only when empty
+  for (auto it = created_.rbegin(); it != created_.rend(); ++it)
+    if (!std::filesystem::remove(*it, ec)) break;  // only empty directories; stop at the first that is not
 }
 
 nlohmann::json selection_json(const Selection& s) {
@@ -331,6 +371,51 @@ double peak_rss_mib() {
   rusage ru{};
   ::getrusage(RUSAGE_SELF, &ru);
   return static_cast<double>(ru.ru_maxrss) / 1024.0;  // Linux: KiB
+}
+
+std::string summary_text(const Diagnostics& d, const VcarParams& p, std::size_t scene_size,
+                         const MaskCounts* masks, double seconds, bool mask_source_folder) {
+  std::string s;
+  char buf[512];
+  std::snprintf(buf, sizeof buf, "selected  %zu of %zu Gaussians   (coarse %zu -> fine %zu -> final %zu)\n",
+                d.n_final, scene_size, d.n_coarse, d.n_fine, d.n_final);
+  s += buf;
+  if (!p.enable_sss)
+    std::snprintf(buf, sizeof buf, "views     SSS off (enable_sss=false)\n");
+  else if (d.n_coarse == 0)
+    std::snprintf(buf, sizeof buf, "views     SSS not reached (the coarse vote selected nothing)\n");
+  else if (d.sss_triggered)
+    std::snprintf(buf, sizeof buf, "views     %zu valid cameras, largest gap %.1f deg %s %.0f: SSS ran (%zu sampled views)\n",
+                  d.valid_cameras, d.max_gap_deg, d.max_gap_deg > p.Delta_th_deg ? ">" : "<=",
+                  static_cast<double>(p.Delta_th_deg), d.sampled_cameras.size());
+  else
+    std::snprintf(buf, sizeof buf, "views     %zu valid cameras, largest gap %.1f deg <= %.0f: SSS not needed\n",
+                  d.valid_cameras, d.max_gap_deg, static_cast<double>(p.Delta_th_deg));
+  s += buf;
+  if (!p.enable_abr) std::snprintf(buf, sizeof buf, "ABR       off (enable_abr=false)\n");
+  else std::snprintf(buf, sizeof buf, "ABR       %zu Gaussians flagged, %zu compressed\n", d.abr_flagged, d.abr_compressed);
+  s += buf;
+  if (masks) {
+    std::snprintf(buf, sizeof buf, "masks     %zu of %zu training views missing", masks->training_missing, masks->training);
+    s += buf;
+    if (masks->sampled) {
+      std::snprintf(buf, sizeof buf, ", %zu of %zu sampled views missing", masks->sampled_missing, masks->sampled);
+      s += buf;
+    }
+    s += "\n";
+    if (mask_source_folder && masks->sampled_missing > 0)
+      s += "note: a mask folder holds no masks of the views SSS sampled (named sss_...), so they add no evidence; "
+           "use --segmenter-cmd to segment them, or --set enable_sss=false\n";
+  }
+  std::snprintf(buf, sizeof buf, "time      %.1f s on %d threads, peak memory %.0f MiB\n", seconds, max_threads(), peak_rss_mib());
+  s += buf;
+  if (!d.note.empty()) s += "note: " + d.note + "\n";
+  return s;
+}
+
+nlohmann::json mask_counts_json(const MaskCounts& m) {
+  return {{"training_views", m.training}, {"training_missing", m.training_missing},
+          {"sampled_views", m.sampled}, {"sampled_missing", m.sampled_missing}};
 }
 
 nlohmann::json write_segmentation(const std::filesystem::path& out, const GaussianScene& scene,

@@ -2,6 +2,8 @@
 // Shared pieces of the `vcar` program: exit codes, the terminal progress line, Ctrl-C,
 // selection files and small parsers. Every error names the file, view or parameter at fault.
 #include <atomic>
+#include <chrono>
+#include <string_view>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -12,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "vcar/io/external_segmenter.hpp"
 #include "vcar/io/selection_identity.hpp"
 #include "vcar/algo/params.hpp"
 #include "vcar/algo/pipeline.hpp"
@@ -44,20 +47,31 @@ struct CliError : Error {
 std::atomic<bool>& interrupted();
 void install_signal_handlers();
 
-// One status line on a terminal (stderr is a tty), nothing otherwise.
+// One status line on a terminal (stderr is a tty), nothing otherwise. Within a round it shows
+// the view (i of n), the time since the command started and an estimate of what the round
+// still needs (from the views done so far); while an external segmenter works, the frame being
+// rendered for it or the masks it has written.
 class ProgressLine {
 public:
   explicit ProgressLine(bool quiet);
   ~ProgressLine();
   // The pipeline callback: prints, and returns false once interrupted (cancels the pipeline).
   bool operator()(const Progress& p);
+  void external(const io::ExternalProgress& p);  // ExternalSegmenterOptions::progress
   void message(const std::string& line);  // a stage outside the pipeline ("reading scene")
   void done();                            // clears the line
   bool active() const { return active_; }
   ProgressCallback callback() { return [this](const Progress& p) { return (*this)(p); }; }
+  // The text of the line for `p`, without terminal codes (tested; `eta_s` < 0: unknown).
+  static std::string format(std::string_view stage, std::size_t done, std::size_t total, const char* unit,
+                            double elapsed_s, double eta_s);
 
 private:
+  void print(const std::string& text);
   bool active_ = false, dirty_ = false;
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  std::string stage_;  // the round the estimate is for
+  double stage_start_s_ = 0;
 };
 
 // ---- files ---------------------------------------------------------------------------------
@@ -66,6 +80,24 @@ nlohmann::json read_json(const std::filesystem::path& file);
 void write_json(const std::filesystem::path& file, const nlohmann::json& j);
 // Creates the output directory (and parents); exit_output naming it on failure.
 void make_output_dir(const std::filesystem::path& dir);
+
+// The output directory of a command that may fail: created (with its parents) by the
+// constructor; unless commit() is called, the destructor removes what the failed run left empty:
+// DIR/requests, then DIR and the parents it created. Files are never removed.
+class OutputDir {
+public:
+  explicit OutputDir(std::filesystem::path dir);
+  ~OutputDir();
+  OutputDir(const OutputDir&) = delete;
+  OutputDir& operator=(const OutputDir&) = delete;
+  void commit() { committed_ = true; }
+  const std::filesystem::path& path() const { return dir_; }
+
+private:
+  std::filesystem::path dir_;
+  std::vector<std::filesystem::path> created_;  // outermost first
+  bool committed_ = false;
+};
 
 // selection.json: {"indices": [...ascending], "scores": [...], "log_scales": [[l0,l1,l2], ...],
 // "scene_gaussians": n, "identity": {"scene": {"gaussians", "ordered", "unordered"},
@@ -101,6 +133,17 @@ VcarParams make_params(const std::string& preset, const std::vector<std::string>
 nlohmann::json params_json(const VcarParams& p);
 
 double peak_rss_mib();
+
+// The summary `segment` and `demo` print: one line each for the counts (selected / coarse /
+// fine), the view gap and whether SSS ran, ABR, missing masks (when `masks` is given: training
+// and sampled views, last round), time and peak memory. `mask_source_folder` adds the advice
+// for sampled views a mask folder cannot answer.
+struct MaskCounts {
+  std::size_t training = 0, training_missing = 0, sampled = 0, sampled_missing = 0;
+};
+std::string summary_text(const Diagnostics& d, const VcarParams& p, std::size_t scene_size,
+                         const MaskCounts* masks, double seconds, bool mask_source_folder);
+nlohmann::json mask_counts_json(const MaskCounts& m);
 
 // ---- outputs shared by `segment` and `demo` -------------------------------------------------
 // Writes object.ply, removed.ply, selection.json and report.json into `out`, and returns the

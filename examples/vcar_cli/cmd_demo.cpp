@@ -9,6 +9,7 @@
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "evaluation.hpp"
+#include "mask_tally.hpp"
 #include "vcar/algo/pipeline.hpp"
 #include "vcar/backends/cpu/tiled_renderer.hpp"
 #include "vcar/io/image_file.hpp"
@@ -47,8 +48,14 @@ int run_demo(const DemoOptions& o, const GlobalOptions& g) {
   const VcarParams params = VcarParams::robust();  // the library's default preset (docs/robust.md)
   cpu::TiledRenderer renderer;
   synth::OracleSegmenter oracle(world, {}, renderer);
+  TallySegmenter tally(oracle, rig.train);
   const SegmentationResult result =
-      segment(world.scene, rig.train, prompt, renderer, oracle, params, progress.callback());
+      segment(world.scene, rig.train, prompt, renderer, tally, params, progress.callback());
+  MaskCounts counts;
+  if (!tally.rounds().empty()) {
+    const RoundTally& t = tally.rounds().back();
+    counts = {t.training, t.training_missing, t.sampled, t.sampled_missing};
+  }
 
   progress.message("writing results");
   nlohmann::json inputs = {{"scene", "built-in synthetic world"}, {"seed", demo_seed},
@@ -109,29 +116,22 @@ int run_demo(const DemoOptions& o, const GlobalOptions& g) {
   report["outputs"]["after_object"] = "after_object.png";
   report["outputs"]["after_removed"] = "after_removed.png";
   report["outputs"]["dataset"] = "dataset";
+  report["masks"] = mask_counts_json(counts);
   write_json(out / "report.json", report);
   progress.done();
 
-  const Diagnostics& d = result.diagnostics;
   std::printf("vcar demo: synthetic scene (seed %llu), %zu Gaussians, %s capture: %zu training views, "
               "%zu held out\n", static_cast<unsigned long long>(demo_seed), world.scene.size(),
               rig.kind.c_str(), rig.train.size(), rig.eval.size());
-  std::printf("  prompt on view '%s'; masks from the oracle (exact ground truth)\n",
-              rig.train[rig.reference].name.c_str());
-  std::printf("  target: %zu Gaussians in truth\n", ev.true_ids.size());
-  std::printf("  coarse vote (tau %.2f): %zu   fine vote (tau %.2f): %zu   final: %zu\n",
-              params.tau_coarse, d.n_coarse, params.tau_fine, d.n_fine, d.n_final);
-  std::printf("  view completeness: %zu valid cameras, max gap %.1f deg -> spiral sampling %s",
-              d.valid_cameras, d.max_gap_deg, d.sss_triggered ? "ran" : "skipped");
-  if (d.sss_triggered) std::printf(" (%zu views)", d.sampled_cameras.size());
-  std::printf("\n  boundary refinement: %zu Gaussians flagged, %zu compressed\n", d.abr_flagged, d.abr_compressed);
-  std::printf("  held-out views, alpha > 0.5: mIoU %.3f  mAcc %.3f  boundary IoU %.3f  boundary F1 %.3f\n",
+  std::printf("prompt    view '%s'; masks from the oracle (exact ground truth); target: %zu Gaussians in truth\n",
+              rig.train[rig.reference].name.c_str(), ev.true_ids.size());
+  std::fputs(summary_text(result.diagnostics, params, world.scene.size(), &counts, total_s, false).c_str(), stdout);
+  std::printf("held out  alpha > 0.5: mIoU %.3f  mAcc %.3f  boundary IoU %.3f  boundary F1 %.3f\n",
               metrics["mIoU"].get<double>(), metrics["mAcc"].get<double>(),
               metrics["boundary_iou"].get<double>(), metrics["boundary_f1"].get<double>());
-  std::printf("  3D ids: precision %.3f  recall %.3f  F1 %.3f\n", metrics["precision_3d"].get<double>(),
+  std::printf("3D ids    precision %.3f  recall %.3f  F1 %.3f\n", metrics["precision_3d"].get<double>(),
               metrics["recall_3d"].get<double>(), metrics["f1_3d"].get<double>());
-  std::printf("  time %.1f s on %d threads, peak memory %.0f MiB\n", total_s, max_threads(), peak_rss_mib());
-  std::printf("  wrote %s/{object.ply, removed.ply, selection.json, report.json, before.png, "
+  std::printf("wrote     %s/{object.ply, removed.ply, selection.json, report.json, before.png, "
               "after_object.png, after_removed.png, dataset/}\n", out.string().c_str());
   return exit_ok;
 }

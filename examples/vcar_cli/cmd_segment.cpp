@@ -1,4 +1,5 @@
 // `vcar segment`: the full pipeline on a scene file, its cameras and a source of masks.
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -11,6 +12,8 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "input_checks.hpp"
+#include "mask_tally.hpp"
 #include "scene_inputs.hpp"
 #include "vcar/algo/pipeline.hpp"
 #include "vcar/backends/cpu/tiled_renderer.hpp"
@@ -107,10 +110,11 @@ SegmentationResult run_pipeline(const GaussianScene& scene, const std::vector<Ca
 }  // namespace
 
 int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
+  const auto t0 = std::chrono::steady_clock::now();
   ProgressLine progress(g.quiet);
-  const fs::path out = o.out;
 
-  // Inputs first (cheap checks before expensive reads), then the scene.
+  // Inputs first (cheap checks before expensive reads), then the scene; the output folder last,
+  // so a run that fails on its inputs leaves nothing behind.
   VcarParams params = make_params(o.preset, o.sets);
   Prompt prompt;
   if (!o.points.empty()) parse_points(o.points, prompt);
@@ -118,9 +122,11 @@ int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
   prompt.text = o.text;
   if (!o.segmenter_cmd.empty() && prompt.points.empty() && !prompt.box && prompt.text.empty())
     throw CliError(exit_usage, "an external segmenter needs a prompt: --points, --box or --text", "--segmenter-cmd");
+  if (!o.state_ply.empty() && fs::is_directory(o.state_ply))
+    throw CliError(exit_usage, "is a directory; give a file name", o.state_ply + " (--state-ply)");
 
   progress.message("reading cameras");
-  const std::vector<Camera> cams = load_cameras(o.cameras);
+  const std::vector<Camera> cams = load_cameras(o.cameras, o.opengl_cameras);
   prompt.reference_view = find_view(cams, o.prompt_view, "--prompt-view");
   const Camera& ref = cams[prompt.reference_view];
   for (std::size_t k = 0; k < prompt.points.size(); ++k)
@@ -128,11 +134,37 @@ int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
       throw CliError(exit_bad_input, "point " + std::to_string(k) + " lies outside view '" + ref.name + "' (" +
                                          std::to_string(ref.width) + "x" + std::to_string(ref.height) + ")",
                      "--points");
+  if (!o.masks.empty()) {
+    if (!fs::is_directory(o.masks)) throw CliError(exit_bad_input, "mask folder does not exist", o.masks + " (--masks)");
+    progress.done();
+    check_mask_folder(o.masks, cams, prompt.reference_view);
+  }
+  std::optional<io::ExternalSegmenter> external;
+  if (!o.segmenter_cmd.empty()) {
+    io::ExternalSegmenterOptions so;
+    so.timeout_s = o.segmenter_timeout;
+    so.keep_requests = o.keep_requests;
+    so.work_dir = fs::path(o.out) / "requests";
+    so.inherit_output = o.segmenter_output;
+    so.cancelled = [] { return interrupted().load(); };
+    so.progress = [&progress](const io::ExternalProgress& p) { progress.external(p); };
+    try {
+      external.emplace(o.segmenter_cmd, so);
+    } catch (const Error& e) {
+      throw CliError(exit_usage, e.what());
+    }
+    check_program(external->argv().front());
+  }
   progress.message("reading scene");
   const GaussianScene scene = load_scene(o.scene);
-  make_output_dir(out);
-  if (!o.state_ply.empty() && fs::is_directory(o.state_ply))
-    throw CliError(exit_usage, "is a directory; give a file name", o.state_ply + " (--state-ply)");
+  progress.done();
+  check_cameras_face_scene(scene, cams, o.cameras, o.opengl_cameras);
+  std::optional<OracleDataset> oracle_ds;
+  if (!o.oracle.empty()) {
+    progress.message("reading the oracle dataset");
+    oracle_ds.emplace(load_oracle_dataset(o.oracle));
+    check_oracle_scene(scene, oracle_ds->world.scene, o.oracle);
+  }
 
   cpu::TiledRenderer cpu_renderer;
   std::optional<PhotoRenderer> photos;
@@ -140,7 +172,7 @@ int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
 
   nlohmann::json inputs = {{"scene", o.scene}, {"cameras", o.cameras}, {"images", o.images},
                            {"prompt_view", ref.name}, {"preset", o.preset}, {"set", o.sets},
-                           {"views", cams.size()},
+                           {"views", cams.size()}, {"opengl_cameras", o.opengl_cameras},
                            {"scene_format", io::scene_format_name(io::detect_scene_format(o.scene))}};
   nlohmann::json pj = {{"points", nlohmann::json::array()}, {"point_labels", prompt.point_labels},
                        {"text", prompt.text}};
@@ -148,44 +180,58 @@ int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
   if (prompt.box) pj["box"] = {(*prompt.box)[0], (*prompt.box)[1], (*prompt.box)[2], (*prompt.box)[3]};
   inputs["prompt"] = pj;
 
-  auto with_renderer = [&](auto& segmenter, const io::ExternalSegmenter* external) {
-    if (photos) return run_pipeline(scene, cams, prompt, *photos, segmenter, params, progress, external);
-    return run_pipeline(scene, cams, prompt, cpu_renderer, segmenter, params, progress, external);
+  OutputDir out(o.out);
+  auto with_renderer = [&](auto& segmenter, const io::ExternalSegmenter* ext) {
+    if (photos) return run_pipeline(scene, cams, prompt, *photos, segmenter, params, progress, ext);
+    return run_pipeline(scene, cams, prompt, cpu_renderer, segmenter, params, progress, ext);
+  };
+  auto tallied = [&](auto& segmenter, const io::ExternalSegmenter* ext, MaskCounts& counts) {
+    TallySegmenter tally(segmenter, cams);
+    SegmentationResult r = with_renderer(tally, ext);
+    if (!tally.rounds().empty()) {  // the last round: the masks the final vote and ABR used
+      const RoundTally& t = tally.rounds().back();
+      counts = {t.training, t.training_missing, t.sampled, t.sampled_missing};
+    }
+    return r;
   };
 
   SegmentationResult result;
+  MaskCounts counts;
   if (!o.masks.empty()) {
     inputs["masks"] = o.masks;
     io::MaskFolderSegmenter seg = make_mask_folder(o.masks);
-    result = with_renderer(seg, nullptr);
-  } else if (!o.segmenter_cmd.empty()) {
+    result = tallied(seg, nullptr, counts);
+  } else if (external) {
     inputs["segmenter_cmd"] = o.segmenter_cmd;
-    io::ExternalSegmenterOptions so;
-    so.timeout_s = o.segmenter_timeout;
-    so.keep_requests = o.keep_requests;
-    so.work_dir = out / "requests";
-    so.inherit_output = o.segmenter_output;
-    so.cancelled = [] { return interrupted().load(); };
-    std::optional<io::ExternalSegmenter> seg;
     try {
-      seg.emplace(o.segmenter_cmd, so);
-    } catch (const Error& e) {
-      throw CliError(exit_usage, e.what());
+      result = tallied(*external, &*external, counts);
+    } catch (...) {
+      // A failed program's request stays for inspection (the message names it); one cut short
+      // by Ctrl-C or by a failure of vcar itself is removed.
+      const auto f = external->failure();
+      if (f == io::ExternalSegmenter::Failure::cancelled || f == io::ExternalSegmenter::Failure::none ||
+          f == io::ExternalSegmenter::Failure::start) {
+        std::error_code ec;
+        if (!external->last_request_dir().empty()) fs::remove_all(external->last_request_dir(), ec);
+      }
+      throw;
     }
-    result = with_renderer(*seg, &*seg);
     if (!o.keep_requests) {
       std::error_code ec;
-      fs::remove(out / "requests", ec);  // only when empty: failed requests stay for inspection
+      fs::remove(out.path() / "requests", ec);  // only when empty: failed requests stay for inspection
     }
   } else {
     inputs["oracle"] = o.oracle;
-    const OracleDataset ds = load_oracle_dataset(o.oracle);
-    synth::OracleSegmenter seg(ds.world, {}, cpu_renderer);
-    result = with_renderer(seg, nullptr);
+    synth::OracleSegmenter seg(oracle_ds->world, {}, cpu_renderer);
+    result = tallied(seg, nullptr, counts);
   }
   progress.done();
 
-  const nlohmann::json report = write_segmentation(out, scene, result, params, inputs);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  nlohmann::json report = write_segmentation(out.path(), scene, result, params, inputs);
+  report["masks"] = mask_counts_json(counts);
+  report["seconds"] = seconds;
+  write_json(out.path() / "report.json", report);
   if (!o.state_ply.empty()) {
     try {  // the input scene unchanged (refined scales stay in object.ply and selection.json)
       io::write_state_ply(o.state_ply, scene, io::selection_state(scene.size(), result.indices));
@@ -193,15 +239,10 @@ int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
       throw CliError(exit_output, e.what());
     }
   }
-  const Diagnostics& d = result.diagnostics;
-  std::printf("selected %zu of %zu Gaussians (coarse %zu, fine %zu); max gap %.1f deg, SSS %s; "
-              "ABR compressed %zu\n",
-              d.n_final, scene.size(), d.n_coarse, d.n_fine, d.max_gap_deg,
-              d.sss_triggered ? "ran" : "skipped", d.abr_compressed);
-  if (!d.note.empty()) std::printf("note: %s\n", d.note.c_str());
-  std::printf("wrote %s/{object.ply, removed.ply, selection.json, report.json}\n", out.string().c_str());
-  if (!o.state_ply.empty()) std::printf("wrote %s (SuperSplat state: the selection is selected)\n", o.state_ply.c_str());
-  (void)report;
+  out.commit();
+  std::fputs(summary_text(result.diagnostics, params, scene.size(), &counts, seconds, !o.masks.empty()).c_str(), stdout);
+  std::printf("wrote     %s/{object.ply, removed.ply, selection.json, report.json}\n", out.path().string().c_str());
+  if (!o.state_ply.empty()) std::printf("wrote     %s (SuperSplat state: the selection is selected)\n", o.state_ply.c_str());
   return exit_ok;
 }
 

@@ -21,11 +21,15 @@ struct SegmentOptions {
   bool keep_requests = false;
   bool segmenter_output = false;  // show the segmenter's stdout/stderr instead of logging it
   std::string state_ply;          // also write the whole scene with SuperSplat's state flags
+  bool opengl_cameras = false;    // the camera file's axes are OpenGL's (x right, y up, z back)
 };
 int run_segment(const SegmentOptions& o, const GlobalOptions& g);
 
 struct RenderOptions {
   std::string scene, cameras, view, out, alpha, selection, background = "0,0,0";
+  std::string views;        // "a,b,c": these views into the folder --out
+  bool all_views = false;   // every view into the folder --out
+  bool opengl_cameras = false;
 };
 int run_render(const RenderOptions& o, const GlobalOptions& g);
 

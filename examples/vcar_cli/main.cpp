@@ -2,7 +2,10 @@
 //   vcar demo | synth | segment | eval | render
 // Exit codes: 0 ok, 1 usage, 2 bad input, 3 segmenter failure, 4 interrupted, 5 cannot write
 // an output, 70 internal error. Every error message names the file, view or parameter.
+#include <cerrno>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <iostream>
 #include <new>
@@ -17,13 +20,82 @@
 
 using namespace vcar::cli;
 
+namespace {
+
+// Validators whose messages name the value and the bound in a few words (CLI11's ranges print
+// the limits of double in full).
+CLI::Validator whole_number_at_least(long long min) {
+  return CLI::Validator(
+      [min](std::string& v) -> std::string {
+        errno = 0;
+        char* end = nullptr;
+        const long long x = std::strtoll(v.c_str(), &end, 10);
+        if (v.empty() || *end != '\0' || errno != 0) return "expected a whole number, got '" + v + "'";
+        if (x < min) return "must be at least " + std::to_string(min) + ", got " + v;
+        return {};
+      },
+      "INT>=" + std::to_string(min));
+}
+CLI::Validator positive_number() {
+  return CLI::Validator(
+      [](std::string& v) -> std::string {
+        errno = 0;
+        char* end = nullptr;
+        const double x = std::strtod(v.c_str(), &end);
+        if (v.empty() || *end != '\0' || errno != 0 || !std::isfinite(x)) return "expected a number, got '" + v + "'";
+        if (!(x > 0)) return "must be greater than 0, got " + v;
+        return {};
+      },
+      "NUMBER>0");
+}
+
+const char* const commands = "demo, synth, segment, eval, render";
+
+// The message of a usage error, in vcar's words: every missing option of the command at once,
+// unknown commands and options named as such.
+std::string usage_message(const CLI::App& app, const CLI::ParseError& e, int argc, char** argv) {
+  const CLI::App* sub = nullptr;
+  for (const CLI::App* s : app.get_subcommands()) sub = s;  // the command given, if any
+  const std::string what = e.what();
+  if (dynamic_cast<const CLI::RequiredError*>(&e)) {
+    if (!sub) {
+      // No command: the first word that is not a global option is an unknown command.
+      for (int k = 1; k < argc; ++k) {
+        const std::string a = argv[k];
+        if (a == "-j" || a == "--threads") { ++k; continue; }
+        if (!a.empty() && a[0] == '-') continue;
+        return "unknown command '" + a + "'; commands: " + commands;
+      }
+      return std::string("no command given; commands: ") + commands;
+    }
+    std::string missing;
+    std::size_t n = 0;
+    for (const CLI::Option* opt : sub->get_options())
+      if (opt->get_required() && opt->count() == 0) { missing += (n++ ? ", " : "") + opt->get_name(); }
+    if (sub->get_name() == "segment" && sub->count("--masks") + sub->count("--segmenter-cmd") + sub->count("--oracle") == 0)
+      missing += (n++ ? ", " : "") + std::string("one of --masks, --segmenter-cmd or --oracle");
+    if (n > 0) return sub->get_name() + ": missing " + missing;
+  }
+  if (dynamic_cast<const CLI::ExtrasError*>(&e)) {
+    const std::string::size_type colon = what.find(": ");
+    const std::string args = colon == std::string::npos ? what : what.substr(colon + 2);
+    const bool option = !args.empty() && args[0] == '-';
+    if (!sub && !option) return "unknown command '" + args.substr(0, args.find(' ')) + "'; commands: " + commands;
+    return std::string(option ? "unknown option" : "unexpected argument") + (args.find(' ') == std::string::npos ? " " : "s ") +
+           args + (sub ? " for '" + sub->get_name() + "'" : std::string());
+  }
+  return what;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   CLI::App app{"vcar: training-free segmentation of 3D Gaussian Splatting scenes (VCAR)", "vcar"};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("vcar 0.1.0"));
   GlobalOptions g;
   app.add_flag("-q,--quiet", g.quiet, "No progress line, even on a terminal");
-  app.add_option("-j,--threads", g.threads, "Worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
+  app.add_option("-j,--threads", g.threads, "Worker threads (0 = all cores)")->check(whole_number_at_least(0));
 
   // ---- demo ------------------------------------------------------------------------------
   DemoOptions demo;
@@ -38,9 +110,9 @@ int main(int argc, char** argv) {
   c_synth->add_option("--seed", synth.seed, "World seed")->capture_default_str();
   c_synth->add_option("--gaussians", synth.gaussians, "Number of Gaussians")->capture_default_str()
       ->check(CLI::Range(std::size_t{100}, std::size_t{100000000}));
-  c_synth->add_option("--views", synth.views, "Training views (0 = the rig's default)")->check(CLI::NonNegativeNumber);
-  c_synth->add_option("--width", synth.width, "Image width (0 = default)")->check(CLI::NonNegativeNumber);
-  c_synth->add_option("--height", synth.height, "Image height (0 = default)")->check(CLI::NonNegativeNumber);
+  c_synth->add_option("--views", synth.views, "Training views (0 = the rig's default)")->check(whole_number_at_least(0));
+  c_synth->add_option("--width", synth.width, "Image width (0 = default)")->check(whole_number_at_least(0));
+  c_synth->add_option("--height", synth.height, "Image height (0 = default)")->check(whole_number_at_least(0));
   c_synth->add_option("--out", synth.out, "Output directory")->required();
 
   // ---- segment ---------------------------------------------------------------------------
@@ -63,10 +135,12 @@ int main(int argc, char** argv) {
   c_seg->add_option("--box", seg.box, "Prompt box \"x0,y0,x1,y1\"");
   c_seg->add_option("--text", seg.text, "Prompt text");
   c_seg->add_option("--segmenter-timeout", seg.segmenter_timeout, "Seconds per segmentation round")
-      ->capture_default_str()->check(CLI::PositiveNumber);
+      ->capture_default_str()->check(positive_number());
   c_seg->add_flag("--keep-requests", seg.keep_requests, "Keep the segmenter's request directories under OUT/requests");
   c_seg->add_flag("--segmenter-output", seg.segmenter_output, "Show the segmenter's output instead of logging it");
   c_seg->add_option("--out", seg.out, "Output directory")->required();
+  c_seg->add_flag("--opengl-cameras", seg.opengl_cameras,
+                  "The camera file uses OpenGL axes (x right, y up, z backward): convert them");
   c_seg->add_option("--state-ply", seg.state_ply,
                     "Also write the whole scene as PLY with SuperSplat's `uchar state` (bit 0: selected)");
 
@@ -81,20 +155,27 @@ int main(int argc, char** argv) {
 
   // ---- render ----------------------------------------------------------------------------
   RenderOptions rd;
-  auto* c_render = app.add_subcommand("render", "Render a view of a scene (or of a selection) to PNG");
+  auto* c_render = app.add_subcommand("render", "Render views of a scene (or of a selection) to PNG or JPEG");
   c_render->add_option("--scene", rd.scene, "3DGS scene: PLY, compressed PLY, SPZ, .splat or state PLY")->required();
   c_render->add_option("--cameras", rd.cameras, "COLMAP sparse dir, cameras.json or transforms.json")->required();
-  c_render->add_option("--view", rd.view, "View name")->required();
-  c_render->add_option("--out", rd.out, "Output PNG (RGB)")->required();
-  c_render->add_option("--alpha", rd.alpha, "Also write the alpha channel to this PNG");
+  auto* o_view = c_render->add_option("--view", rd.view, "View name");
+  auto* o_views = c_render->add_option("--views", rd.views, "Views a,b,c: each to OUT/<view>.png (--out is a folder)");
+  auto* o_all = c_render->add_flag("--all-views", rd.all_views, "Every view to OUT/<view>.png (--out is a folder)");
+  o_view->excludes(o_views)->excludes(o_all);
+  o_views->excludes(o_all);
+  c_render->add_option("--out", rd.out, "Output image (.png, .jpg), or folder with --views / --all-views")->required();
+  c_render->add_option("--alpha", rd.alpha, "Also write the alpha channel to this image (a folder with --views / --all-views)");
   c_render->add_option("--selection", rd.selection, "Render only this selection (selection.json with its refined scales, or a state PLY)");
   c_render->add_option("--background", rd.background, "Background colour r,g,b in [0,1]")->capture_default_str();
+  c_render->add_flag("--opengl-cameras", rd.opengl_cameras,
+                     "The camera file uses OpenGL axes (x right, y up, z backward): convert them");
 
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    const int rc = app.exit(e);  // prints help / version / the usage error
-    return rc == 0 ? exit_ok : exit_usage;
+    if (e.get_exit_code() == 0) return app.exit(e) == 0 ? exit_ok : exit_usage;  // --help, --version
+    std::fprintf(stderr, "vcar: error: %s\nRun with --help for more information.\n", usage_message(app, e, argc, argv).c_str());
+    return exit_usage;
   }
 
   install_signal_handlers();

@@ -1,6 +1,9 @@
 #include "scene_inputs.hpp"
 
+#include <unordered_map>
+
 #include "cli_common.hpp"
+#include "input_checks.hpp"
 #include "vcar/io/cameras.hpp"
 #include "vcar/io/scene_file.hpp"
 #include "vcar/synth/dataset.hpp"
@@ -14,16 +17,27 @@ GaussianScene load_scene(const std::filesystem::path& ply) {
   return s;
 }
 
-std::vector<Camera> load_cameras(const std::filesystem::path& path) {
+std::vector<Camera> load_cameras(const std::filesystem::path& path, bool opengl) {
   std::vector<Camera> cams = io::read_cameras(path);
   if (cams.empty()) throw CliError(exit_bad_input, "no cameras in the file", path.string());
-  for (const Camera& c : cams) {
+  std::unordered_map<std::string, std::size_t> first;  // views are named by img_name: masks, images, --view
+  for (std::size_t k = 0; k < cams.size(); ++k) {
+    const Camera& c = cams[k];
     try {
       c.validate();
     } catch (const Error& e) {
       throw CliError(exit_bad_input, e.what(), path.string());
     }
+    const std::string stem = std::filesystem::path(c.name).stem().string();
+    const auto [it, fresh] = first.emplace(stem, k);
+    if (!fresh)
+      throw CliError(exit_bad_input, "views " + std::to_string(it->second) + " and " + std::to_string(k) +
+                                         " have the same name '" + c.name + "'" +
+                                         (cams[it->second].name == c.name ? "" : " (as '" + cams[it->second].name + "')") +
+                                         " (names must differ without their extension: masks and images are matched by them)",
+                     path.string());
   }
+  if (opengl) opengl_to_opencv(cams);
   return cams;
 }
 

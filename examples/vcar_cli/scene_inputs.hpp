@@ -14,7 +14,9 @@ namespace vcar::cli {
 
 // A scene in any format io::read_scene knows (docs/formats.md).
 GaussianScene load_scene(const std::filesystem::path& ply);
-std::vector<Camera> load_cameras(const std::filesystem::path& path);
+// Cameras in any format io::read_cameras knows; names must be unique (without extension).
+// `opengl`: the file's camera axes are OpenGL's (--opengl-cameras), converted to OpenCV's.
+std::vector<Camera> load_cameras(const std::filesystem::path& path, bool opengl = false);
 io::MaskFolderSegmenter make_mask_folder(const std::filesystem::path& dir);
 
 // A `vcar synth` dataset's world (primitives, Gaussians, true ids) for the oracle and eval.

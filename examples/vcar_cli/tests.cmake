@@ -25,8 +25,16 @@ endfunction()
 # ---- usage ---------------------------------------------------------------------------------
 vcar_cli_test(NAME help ARGS "--help" RC 0)
 vcar_cli_test(NAME usage_missing_option ARGS "segment|--scene|x.ply" RC 1
-  CHECKS "-DSTDERR_HAS=--cameras")
-vcar_cli_test(NAME usage_no_command ARGS "" RC 1)
+  CHECKS "-DSTDERR_HAS=vcar: error: segment: missing --cameras, --prompt-view, --out, one of --masks, --segmenter-cmd or --oracle")
+vcar_cli_test(NAME usage_no_command ARGS "" RC 1 CHECKS "-DSTDERR_HAS=vcar: error: no command given")
+vcar_cli_test(NAME usage_unknown_command ARGS "-q|frobnicate" RC 1
+  CHECKS "-DSTDERR_HAS=vcar: error: unknown command 'frobnicate'; commands: demo" "-DSTDERR_LACKS=A subcommand")
+vcar_cli_test(NAME usage_unknown_flag ARGS "demo|--frobnicate" RC 1
+  CHECKS "-DSTDERR_HAS=vcar: error: unknown option --frobnicate for 'demo'")
+vcar_cli_test(NAME usage_negative_threads ARGS "-j|-3|demo" RC 1
+  CHECKS "-DSTDERR_HAS=vcar: error: |must be at least 0, got -3" "-DSTDERR_MAX=200")
+vcar_cli_test(NAME usage_bad_timeout ARGS "segment|--scene|s|--cameras|c|--prompt-view|v|--oracle|d|--out|o|--segmenter-timeout|-1" RC 1
+  CHECKS "-DSTDERR_HAS=vcar: error: |--segmenter-timeout|must be greater than 0" "-DSTDERR_MAX=200")
 vcar_cli_test(NAME usage_two_mask_sources
   ARGS "segment|--scene|s.ply|--cameras|c.json|--prompt-view|v|--masks|m|--oracle|d|--out|${_cli_work}/x" RC 1)
 
@@ -110,6 +118,67 @@ vcar_cli_test(NAME segment_segmenter_timeout
   FIXTURES_REQUIRED vcar_cli_dataset
   CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DSTDERR_HAS=timed out")
 
+# ---- inputs that used to give silently wrong results (make_bad_inputs.py) --------------------
+set(_bad ${_cli_work}/bad_inputs)
+add_test(NAME cli/bad_inputs
+  COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/make_bad_inputs.py ${_cli_ds} ${_bad})
+set_tests_properties(cli/bad_inputs PROPERTIES FIXTURES_REQUIRED vcar_cli_dataset FIXTURES_SETUP vcar_cli_bad_inputs)
+# A mask folder whose names match no view: exit 2 naming the files expected; nothing written.
+vcar_cli_test(NAME segment_masks_match_no_view
+  ARGS "${_seg_common}|--masks|${_bad}/masks_renamed|--out|${_cli_work}/seg_nomatch" RC 2
+  FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_bad_inputs"
+  CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DCLEAN=${_cli_work}/seg_nomatch"
+         "-DSTDERR_HAS=no mask matches a view|masks_renamed/train_000.png|mask_000" "-DABSENT=${_cli_work}/seg_nomatch")
+# Half the masks: a warning naming them, the count in the summary and report; with SSS forced
+# on, the note that a folder cannot answer the sampled views.
+vcar_cli_test(NAME segment_masks_half_missing
+  ARGS "${_seg_common}|--masks|${_bad}/masks_half|--set|force_sss=true|--out|${_cli_work}/seg_half" RC 0
+  FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_bad_inputs"
+  CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DCLEAN=${_cli_work}/seg_half"
+         "-DSTDERR_HAS=vcar: warning: 4 of 8 views have no mask|masks_half/train_004.png"
+         "-DSTDOUT_HAS=masks     4 of 8 training views missing|sampled views missing|use --segmenter-cmd to segment them"
+         "-DEQUALS=${_cli_work}/seg_half/report.json:masks.training_missing:4")
+vcar_cli_test(NAME segment_duplicate_view_names
+  ARGS "segment|--scene|${_cli_ds}/scene.ply|--cameras|${_bad}/cameras_dup.json|--masks|${_cli_ds}/masks|--out|${_cli_work}/seg_dup" RC 2
+  FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_bad_inputs"
+  CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DSTDERR_HAS=views 0 and 1 have the same name 'train_000'|cameras_dup.json"
+         "-DABSENT=${_cli_work}/seg_dup")
+# Cameras with OpenGL axes: refused, saying which convention is expected and which flag reads them.
+vcar_cli_test(NAME segment_opengl_cameras_refused
+  ARGS "segment|--scene|${_cli_ds}/scene.ply|--cameras|${_bad}/cameras_opengl.json|--masks|${_cli_ds}/masks|--out|${_cli_work}/seg_gl_refused" RC 2
+  FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_bad_inputs"
+  CHECKS "-DPROMPT_FROM=${_cli_ds}"
+         "-DSTDERR_HAS=almost no Gaussian is in view|x right, y down, z forward|units|--opengl-cameras"
+         "-DABSENT=${_cli_work}/seg_gl_refused")
+vcar_cli_test(NAME segment_opengl_cameras_flag
+  ARGS "segment|--scene|${_cli_ds}/scene.ply|--cameras|${_bad}/cameras_opengl.json|--opengl-cameras|--masks|${_cli_ds}/masks|--out|${_cli_work}/seg_gl" RC 0
+  FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_bad_inputs"
+  CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DCLEAN=${_cli_work}/seg_gl"
+         "-DPOSITIVE=${_cli_work}/seg_gl/report.json:counts.final")
+# The oracle of another scene: refused (an edited copy has other Gaussians).
+vcar_cli_test(NAME segment_oracle_other_scene
+  ARGS "segment|--scene|${_cli_work}/edited.ply|--cameras|${_cli_ds}/cameras.json|--oracle|${_cli_ds}|--out|${_cli_work}/seg_oracle_other" RC 2
+  FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_reordered"
+  CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DSTDERR_HAS=oracle dataset is of another scene|--oracle"
+         "-DABSENT=${_cli_work}/seg_oracle_other")
+# A segmenter program that does not exist: noticed before any frame is rendered; no output left.
+vcar_cli_test(NAME segment_segmenter_missing_program
+  ARGS "${_seg_common}|--segmenter-cmd|/no/such/segmenter --x|--out|${_cli_work}/seg_noprog" RC 3
+  FIXTURES_REQUIRED vcar_cli_dataset
+  CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DCLEAN=${_cli_work}/seg_noprog"
+         "-DSTDERR_HAS=/no/such/segmenter|does not exist" "-DABSENT=${_cli_work}/seg_noprog")
+vcar_cli_test(NAME segment_segmenter_not_in_path
+  ARGS "${_seg_common}|--segmenter-cmd|vcar-no-such-segmenter|--out|${_cli_work}/seg_nopath" RC 3
+  FIXTURES_REQUIRED vcar_cli_dataset
+  CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DCLEAN=${_cli_work}/seg_nopath"
+         "-DSTDERR_HAS=vcar-no-such-segmenter|not in PATH" "-DABSENT=${_cli_work}/seg_nopath")
+# Progress on a terminal (script(1) gives the run a pty): frames being rendered for the
+# segmenter, masks it has written, elapsed time and an estimate.
+add_test(NAME cli/segment_progress_on_a_terminal
+  COMMAND /bin/sh ${CMAKE_CURRENT_SOURCE_DIR}/progress_tty.sh $<TARGET_FILE:vcar_cli> ${_cli_ds}
+          ${PROJECT_SOURCE_DIR}/examples/segmenters/colour_picker.py ${_cli_work}/progress)
+set_tests_properties(cli/segment_progress_on_a_terminal PROPERTIES FIXTURES_REQUIRED vcar_cli_dataset TIMEOUT 120)
+
 # ---- eval and render -----------------------------------------------------------------------
 vcar_cli_test(NAME eval_json
   ARGS "eval|--dataset|${_cli_ds}|--selection|${_cli_work}/seg_masks/selection.json|--json" RC 0
@@ -123,6 +192,33 @@ vcar_cli_test(NAME render
   ARGS "render|--scene|${_cli_ds}/scene.ply|--cameras|${_cli_ds}/cameras.json|--view|train_000|--selection|${_cli_work}/seg_masks/selection.json|--out|${_cli_work}/render.png|--alpha|${_cli_work}/render_alpha.png" RC 0
   FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_selection"
   CHECKS "-DFILES=${_cli_work}/render.png|${_cli_work}/render_alpha.png")
+
+# Render formats and folders: JPEG by extension, unknown extensions and missing folders refused,
+# every view or a list of views into a folder.
+vcar_cli_test(NAME render_jpeg
+  ARGS "render|--scene|${_cli_ds}/scene.ply|--cameras|${_cli_ds}/cameras.json|--view|train_001|--out|${_cli_work}/render.jpg" RC 0
+  FIXTURES_REQUIRED vcar_cli_dataset CHECKS "-DHEAD=${_cli_work}/render.jpg:ffd8ff")
+vcar_cli_test(NAME render_unknown_extension
+  ARGS "render|--scene|${_cli_ds}/scene.ply|--cameras|${_cli_ds}/cameras.json|--view|train_001|--out|${_cli_work}/render.bmp" RC 1
+  FIXTURES_REQUIRED vcar_cli_dataset CHECKS "-DSTDERR_HAS=unknown image format '.bmp'" "-DABSENT=${_cli_work}/render.bmp")
+vcar_cli_test(NAME render_missing_directory
+  ARGS "render|--scene|${_cli_ds}/scene.ply|--cameras|${_cli_ds}/cameras.json|--view|train_001|--out|${_cli_work}/no_such_dir/r.png" RC 5
+  FIXTURES_REQUIRED vcar_cli_dataset CHECKS "-DSTDERR_HAS=no_such_dir does not exist")
+vcar_cli_test(NAME render_all_views
+  ARGS "render|--scene|${_cli_ds}/scene.ply|--cameras|${_cli_ds}/cameras.json|--all-views|--out|${_cli_work}/all_views|--alpha|${_cli_work}/all_alpha" RC 0
+  FIXTURES_REQUIRED vcar_cli_dataset
+  CHECKS "-DCLEAN=${_cli_work}/all_views"
+         "-DFILES=${_cli_work}/all_views/train_000.png|${_cli_work}/all_views/train_007.png|${_cli_work}/all_alpha/train_007.png"
+         "-DSTDOUT_HAS=rendered 8 views")
+vcar_cli_test(NAME render_views_list
+  ARGS "render|--scene|${_cli_ds}/scene.ply|--cameras|${_cli_ds}/cameras.json|--views|train_002,train_005|--out|${_cli_work}/two_views" RC 0
+  FIXTURES_REQUIRED vcar_cli_dataset
+  CHECKS "-DCLEAN=${_cli_work}/two_views" "-DFILES=${_cli_work}/two_views/train_002.png|${_cli_work}/two_views/train_005.png"
+         "-DABSENT=${_cli_work}/two_views/train_000.png")
+vcar_cli_test(NAME render_views_unknown
+  ARGS "render|--scene|${_cli_ds}/scene.ply|--cameras|${_cli_ds}/cameras.json|--views|train_002,nope|--out|${_cli_work}/bad_views" RC 2
+  FIXTURES_REQUIRED vcar_cli_dataset
+  CHECKS "-DCLEAN=${_cli_work}/bad_views" "-DSTDERR_HAS=no view named 'nope'" "-DABSENT=${_cli_work}/bad_views")
 
 # Ctrl-C while the external segmenter runs: exit 4, the program is stopped.
 add_test(NAME cli/segment_interrupted

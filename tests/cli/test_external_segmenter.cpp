@@ -192,3 +192,31 @@ TEST_CASE("ExternalSegmenter failures name the round and the frame") {
     CHECK_THROWS_WITH(ExternalSegmenter("x", o), Catch::Contains("timeout"));
   }
 }
+
+TEST_CASE("ExternalSegmenter reports progress: frames rendered, then masks written") {
+  Fixture fx;
+  auto o = fx.options();
+  std::vector<vcar::io::ExternalProgress> seen;
+  o.progress = [&](const vcar::io::ExternalProgress& p) { seen.push_back(p); };
+  // Sleeps before writing, so the wait loop reports while no mask exists yet.
+  ExternalSegmenter s("/usr/bin/python3 " + picker + " --sleep 0.6", o);
+  const auto masks = vcar::segment_all(s, fx.frames(), fx.prompt);
+  REQUIRE(masks.size() == 3);
+  using Phase = vcar::io::ExternalProgress::Phase;
+  std::vector<std::size_t> rendered;
+  std::size_t running = 0;
+  for (const auto& p : seen) {
+    CHECK(p.round == 1);
+    CHECK(p.frames == 3);
+    if (p.phase == Phase::rendering) {
+      CHECK(running == 0);  // every frame is rendered before the program starts
+      rendered.push_back(p.done);
+    } else {
+      ++running;
+      CHECK(p.done <= 3);
+    }
+  }
+  CHECK(rendered == std::vector<std::size_t>{0, 1, 2});
+  CHECK(running >= 2);  // about every 0.25 s while the program sleeps 0.6 s
+  CHECK(seen[rendered.size()].done == 0);  // the first report of the running phase: no mask yet
+}

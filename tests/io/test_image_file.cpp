@@ -94,23 +94,44 @@ TEST_CASE("float images are clamped and rounded to 8 bits") {
   CHECK(m(2, 0) == 255);
 }
 
-TEST_CASE("masks: 8-bit, 16-bit, paletted, RGBA; nonzero = foreground") {
+TEST_CASE("masks: 8-bit, 16-bit, paletted, RGBA; foreground from half range") {
   TempDir tmp;
-  SECTION("8-bit grey") {
+  SECTION("8-bit grey: >= 128 is foreground") {
     vcar::Mask src(4, 2, 1);
-    src.data = {0, 1, 0, 200, 0, 0, 255, 0};
+    src.data = {0, 1, 127, 200, 128, 0, 255, 0};
     vcar::io::write_png(tmp / "m.png", src);
     const auto m = vcar::io::read_mask(tmp / "m.png", 4, 2);
     CHECK(m.channels == 1);
-    CHECK(m.data == std::vector<std::uint8_t>{0, 255, 0, 255, 0, 0, 255, 0});
+    CHECK(m.data == std::vector<std::uint8_t>{0, 0, 0, 255, 255, 0, 255, 0});
   }
-  SECTION("16-bit grey: a value below 256 is still foreground") {
+  SECTION("8-bit grey holding only 0 and 1: a 0/1 label mask") {
+    vcar::Mask src(3, 1, 1);
+    src.data = {0, 1, 1};
+    vcar::io::write_png(tmp / "l.png", src);
+    CHECK(vcar::io::read_mask(tmp / "l.png").data == std::vector<std::uint8_t>{0, 255, 255});
+  }
+  SECTION("16-bit grey: >= 32768 is foreground") {
     std::string r0, r1;
-    for (std::uint16_t v : {0, 1, 0}) { r0.push_back(static_cast<char>(v >> 8)); r0.push_back(static_cast<char>(v & 0xff)); }
-    for (std::uint16_t v : {65535, 0, 256}) { r1.push_back(static_cast<char>(v >> 8)); r1.push_back(static_cast<char>(v & 0xff)); }
+    for (std::uint16_t v : {0, 1, 32767}) { r0.push_back(static_cast<char>(v >> 8)); r0.push_back(static_cast<char>(v & 0xff)); }
+    for (std::uint16_t v : {65535, 0, 32768}) { r1.push_back(static_cast<char>(v >> 8)); r1.push_back(static_cast<char>(v & 0xff)); }
     write_bytes(tmp / "m16.png", make_png(3, 2, 16, 0, {r0, r1}));
     const auto m = vcar::io::read_mask(tmp / "m16.png", 3, 2);
-    CHECK(m.data == std::vector<std::uint8_t>{0, 255, 0, 255, 0, 255});
+    CHECK(m.data == std::vector<std::uint8_t>{0, 0, 0, 255, 0, 255});
+  }
+  SECTION("JPEG mask: compression noise around the edge is not foreground") {
+    // A white square on black, JPEG at low quality: ringing puts small nonzero values in the
+    // background; the half-range threshold gives back the square.
+    vcar::Image<std::uint8_t> img(32, 32, 1, 0);
+    for (int y = 5; y < 21; ++y) for (int x = 5; x < 21; ++x) img(x, y, 0) = 255;  // across 8x8 blocks
+    REQUIRE(stbi_write_jpg((tmp / "m.jpg").string().c_str(), 32, 32, 1, img.data.data(), 50));
+    const auto raw = vcar::io::read_image_rgb8(tmp / "m.jpg");
+    std::size_t noisy = 0;  // background pixels the old "nonzero" rule would have counted
+    for (int y = 0; y < 32; ++y) for (int x = 0; x < 32; ++x) noisy += img(x, y, 0) == 0 && raw(x, y, 0) != 0;
+    REQUIRE(noisy > 0);
+    const auto m = vcar::io::read_mask(tmp / "m.jpg", 32, 32);
+    std::size_t wrong = 0;
+    for (int y = 0; y < 32; ++y) for (int x = 0; x < 32; ++x) wrong += (m(x, y, 0) != 0) != (img(x, y, 0) != 0);
+    CHECK(wrong == 0);
   }
   SECTION("paletted (DAVIS style: index 0 black, others coloured)") {
     const std::string pal("\x00\x00\x00\x80\x00\x00\x00\x80\x00", 9);
@@ -121,9 +142,12 @@ TEST_CASE("masks: 8-bit, 16-bit, paletted, RGBA; nonzero = foreground") {
   }
   SECTION("RGBA: opaque black background is background; black-only colour uses alpha") {
     vcar::Image<std::uint8_t> a(2, 1, 4);
-    a.data = {0, 0, 0, 255, 0, 9, 0, 255};
+    a.data = {0, 0, 0, 255, 0, 200, 0, 255};
     vcar::io::write_png(tmp / "a.png", a);
     CHECK(vcar::io::read_mask(tmp / "a.png").data == std::vector<std::uint8_t>{0, 255});
+    a.data = {0, 0, 0, 255, 0, 9, 0, 255};  // dark colour: background, and alpha is not used
+    vcar::io::write_png(tmp / "c.png", a);
+    CHECK(vcar::io::read_mask(tmp / "c.png").data == std::vector<std::uint8_t>{0, 0});
     a.data = {0, 0, 0, 0, 0, 0, 0, 255};
     vcar::io::write_png(tmp / "b.png", a);
     CHECK(vcar::io::read_mask(tmp / "b.png").data == std::vector<std::uint8_t>{0, 255});
@@ -144,4 +168,30 @@ TEST_CASE("masks: 8-bit, 16-bit, paletted, RGBA; nonzero = foreground") {
     require_error([&] { vcar::io::read_mask(tmp / "junk.png"); }, {"junk.png"});
     require_error([&] { vcar::io::read_image_rgb8(tmp / "none.jpg"); }, {"none.jpg"});
   }
+}
+
+TEST_CASE("write_image: PNG or JPEG by extension, others refused") {
+  TempDir tmp;
+  vcar::Image<std::uint8_t> img(16, 8, 3, 0);
+  for (int y = 0; y < 8; ++y) for (int x = 8; x < 16; ++x) for (int c = 0; c < 3; ++c) img(x, y, c) = 250;
+  auto head = [](const std::filesystem::path& f) {
+    std::ifstream in(f, std::ios::binary);
+    std::string h(3, '\0');
+    in.read(h.data(), 3);
+    return h;
+  };
+  vcar::io::write_image(tmp / "a.jpg", img);
+  vcar::io::write_image(tmp / "b.JPEG", img);
+  vcar::io::write_image(tmp / "c.png", img);
+  CHECK(head(tmp / "a.jpg") == std::string("\xff\xd8\xff", 3));  // JPEG SOI marker
+  CHECK(head(tmp / "b.JPEG") == std::string("\xff\xd8\xff", 3));
+  CHECK(head(tmp / "c.png") == std::string("\x89PN", 3));
+  const auto back = vcar::io::read_image_rgb8(tmp / "a.jpg");
+  CHECK(back.width == 16);
+  CHECK(back(12, 4, 0) > 200);
+  CHECK(back(3, 4, 0) < 50);
+  require_error([&] { vcar::io::write_image(tmp / "d.bmp", img); }, {"d.bmp", ".bmp"});
+  CHECK_FALSE(std::filesystem::exists(tmp / "d.bmp"));
+  vcar::Image<std::uint8_t> rgba(2, 2, 4, 0);
+  require_error([&] { vcar::io::write_jpg(tmp / "e.jpg", rgba); }, {"e.jpg", "channels"});
 }

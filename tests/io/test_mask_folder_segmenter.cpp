@@ -16,7 +16,7 @@ TEST_CASE("MaskFolderSegmenter answers each frame with the mask named after its 
     cams.push_back(vcar::Camera::look_at({0, 0, 5}, {0, 0, 0}, {0, 1, 0}, k, n));
   vcar::Mask m1(4, 3, 1), m2(4, 3, 1), m3(4, 3, 1);
   m1(1, 2) = 255;
-  m2(3, 0) = 7;
+  m2(3, 0) = 200;  // foreground: >= 128 (io/image_file.hpp)
   m3.data.assign(12, 0);
   vcar::io::write_png(tmp / "IMG_01.png", m1);
   vcar::io::write_png(tmp / "IMG_02.png", m2);

@@ -325,7 +325,9 @@ TEST_CASE("output directory that cannot be written", "[regression][output]") {
   vcar::GaussianScene s;
   s.resize(3);
   CHECK_THAT(error_of([&] { vcar::io::write_ply(file / "object.ply", s); }),
-             Catch::Contains("cannot create a temporary file") && Catch::Contains("a_file"));
+             Catch::Contains("is not a directory") && Catch::Contains("a_file"));
+  CHECK_THAT(error_of([&] { vcar::io::write_ply(scratch("no_such_dir") / "sub" / "object.ply", s); }),
+             Catch::Contains("no_such_dir/sub does not exist") && Catch::Contains("object.ply"));
 }
 
 TEST_CASE("disk full while writing: the target keeps its old content, no temporary is left", "[regression][output]") {

@@ -39,7 +39,13 @@ inline void atomic_write(const std::filesystem::path& path,
   auto discard = [&] { std::error_code ec; std::filesystem::remove(tmp, ec); };
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw Error("cannot create a temporary file in the target directory", where);
+    if (!out) {
+      std::error_code ec;
+      const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
+      if (!std::filesystem::exists(dir, ec)) throw Error("the directory " + dir.string() + " does not exist", where);
+      if (!std::filesystem::is_directory(dir, ec)) throw Error(dir.string() + " is not a directory", where);
+      throw Error("cannot create a temporary file in the target directory (permissions? disk full?)", where);
+    }
     try {
       write(out);
       out.flush();

@@ -13,8 +13,9 @@
 //      prompt.json           {"points": [[u, v], ...], "point_labels": [1, 0, ...],
 //                             "box": [x0, y0, x1, y1] or null, "text": "...",
 //                             "round": r, "frames": n}
-//  - the program writes masks/00000.png ... (8-bit, any channel count, nonzero = foreground;
-//    a missing file means "no mask" for that frame) and exits with status 0.
+//  - the program writes masks/00000.png ... (8-bit, any channel count, foreground >= 128 as
+//    io::read_mask reads it; a missing file means "no mask" for that frame) and exits with
+//    status 0.
 // A non-zero exit, a timeout, a mask that cannot be decoded or has the wrong size is an error
 // naming the round and the frame; `failure()` then says which, so a program can map it to an
 // exit code. The request directory is removed after a successful round and kept after a
@@ -101,6 +102,16 @@ inline std::vector<std::string> split_command_line(const std::string& line,
   return words;
 }
 
+// What the progress callback sees while a round is under way: the frames being rendered into
+// the request (frame i of n), then the program running (masks it has written so far).
+struct ExternalProgress {
+  enum class Phase { rendering, running } phase = Phase::rendering;
+  std::size_t round = 0;          // 1-based
+  std::size_t done = 0;           // frames rendered / masks written so far
+  std::size_t frames = 0;         // frames of the round
+  double elapsed_s = 0;           // since the phase began
+};
+
 struct ExternalSegmenterOptions {
   double timeout_s = 3600;               // per round; the program is killed after it
   std::filesystem::path work_dir;        // where request directories go ("" = system temp)
@@ -108,6 +119,8 @@ struct ExternalSegmenterOptions {
   bool keep_failed_requests = true;      // keep the request directory of a failed round
   bool inherit_output = false;           // child's stdout/stderr: ours (true) or a log file
   std::function<bool()> cancelled;       // polled while the program runs; true kills it
+  // Called before each frame is rendered and about every 0.25 s while the program runs.
+  std::function<void(const ExternalProgress&)> progress;
 };
 
 class ExternalSegmenter {
@@ -140,7 +153,7 @@ public:
     } cleanup{dir, options_, ok};
 
     write_request(dir, frames, prompt, where_round);
-    run_program(dir, where_round);
+    run_program(dir, where_round, frames.size());
     // Read every mask before handing any to the sink, so a bad file fails the round cleanly.
     const std::size_t n = frames.size();
     for (std::size_t k = 0; k < n; ++k) {
@@ -208,7 +221,11 @@ private:
     std::filesystem::create_directories(dir / "frames");
     std::filesystem::create_directories(dir / "masks");
     nlohmann::json cams = nlohmann::json::array();
+    const auto t0 = std::chrono::steady_clock::now();
     for (std::size_t k = 0; k < frames.size(); ++k) {
+      if (options_.progress)
+        options_.progress({ExternalProgress::Phase::rendering, round_, k, frames.size(),
+                           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()});
       const std::string stem = frame_stem(k);
       const ImageRGB8 img = frames.image(k);
       const std::filesystem::path file = dir / "frames" / (stem + ".png");
@@ -251,7 +268,19 @@ private:
     return s.empty() ? std::string{} : "\n--- segmenter output (tail) ---\n" + s;
   }
 
-  void run_program(const std::filesystem::path& dir, const std::string& where) {
+  // Masks the program has finished so far: masks/NNNNN.png (a file being written under another
+  // name, e.g. NNNNN.png.part.png, does not count).
+  static std::size_t masks_written(const std::filesystem::path& dir) {
+    std::size_t n = 0;
+    std::error_code ec;
+    for (const auto& e : std::filesystem::directory_iterator(dir / "masks", ec)) {
+      const std::string f = e.path().filename().string();
+      n += f.size() == 9 && f.compare(5, 4, ".png") == 0 && f.find_first_not_of("0123456789") == 5;
+    }
+    return n;
+  }
+
+  void run_program(const std::filesystem::path& dir, const std::string& where, std::size_t frames) {
     std::vector<std::string> args = argv_;
     args.push_back(dir.string());
     std::vector<char*> cargv;
@@ -292,9 +321,17 @@ private:
     const auto t0 = std::chrono::steady_clock::now();
     int status = 0;
     auto sleep = std::chrono::milliseconds(2);
+    double next_tick = 0;
     for (;;) {
       const pid_t w = ::waitpid(pid, &status, WNOHANG);
       if (w == pid) break;
+      if (options_.progress) {
+        const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        if (t >= next_tick) {
+          options_.progress({ExternalProgress::Phase::running, round_, masks_written(dir), frames, t});
+          next_tick = t + 0.25;
+        }
+      }
       if (w < 0 && errno != EINTR) {
         failure_ = Failure::start;
         throw Error(std::string("waitpid failed: ") + std::strerror(errno), cmd_where);
@@ -336,7 +373,7 @@ private:
 
   Mask read_mask_png(const std::filesystem::path& file, const std::string& where) {
     try {
-      return read_mask(file);  // io/image_file.hpp: any channel count, nonzero = foreground
+      return read_mask(file);  // io/image_file.hpp: any channel count, foreground from half range
     } catch (const Error& e) {
       failure_ = Failure::bad_mask;
       throw Error(std::string("cannot decode the mask (") + e.what() + ")", where);

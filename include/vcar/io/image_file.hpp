@@ -2,13 +2,18 @@
 // Image and mask files through stb (PNG, JPEG and whatever else stb_image decodes).
 //
 // Masks (conventions §4): the result is one 8-bit channel, 255 = foreground, 0 = background.
-// - 8-bit grey: nonzero is foreground; 16-bit PNG (read with stbi_load_16): nonzero likewise.
-// - colour masks, including paletted PNG (stb expands the palette to RGB(A)): a pixel is
-//   foreground when it is not black, i.e. any colour channel is nonzero. Alpha is ignored,
-//   except when the colour is black everywhere: then the alpha channel is the mask.
+// - 8-bit grey or colour: a pixel is foreground when a colour channel reaches half range
+//   (>= 128), so compression noise around 0 and 255 (JPEG masks) counts for nothing; 16-bit PNG
+//   (read with stbi_load_16) likewise at >= 32768. A mask that holds only the values 0 and 1 is
+//   a 0/1 label mask: 1 is foreground.
+// - paletted PNG (stb expands the palette to RGB(A)): a pixel is foreground when its palette
+//   colour is not black (DAVIS/VOC palettes: index 0 black, objects coloured, some dark).
+// - Alpha is ignored, except when the colour is background everywhere: then the alpha channel
+//   is the mask (same threshold).
 // - a mask of another size than expected is an error naming the file and both sizes.
-// PNG writing is atomic (encoded in memory, then temp file + rename).
+// PNG and JPEG writing is atomic (encoded in memory, then temp file + rename).
 #include <algorithm>
+#include <cctype>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -107,6 +112,36 @@ inline void write_png(const std::filesystem::path& path, const Image<std::uint8_
   });
 }
 
+// 8-bit baseline JPEG with 1 (grey) or 3 (RGB) channels, quality 1-100 (stb), atomic like PNG.
+inline void write_jpg(const std::filesystem::path& path, const Image<std::uint8_t>& img, int quality = 95) {
+  const std::string where = path.string();
+  if (img.channels != 1 && img.channels != 3)
+    throw Error("JPEG needs 1 or 3 channels, got " + std::to_string(img.channels), where);
+  if (img.width <= 0 || img.height <= 0 || img.data.size() != img.pixels() * static_cast<std::size_t>(img.channels))
+    throw Error("image is empty or its data does not match its size", where);
+  if (quality < 1 || quality > 100) throw Error("JPEG quality must be in [1, 100]", where);
+  std::vector<unsigned char> jpg;
+  auto sink = [](void* ctx, void* data, int size) {
+    auto* v = static_cast<std::vector<unsigned char>*>(ctx);
+    v->insert(v->end(), static_cast<unsigned char*>(data), static_cast<unsigned char*>(data) + size);
+  };
+  if (!stbi_write_jpg_to_func(sink, &jpg, img.width, img.height, img.channels, img.data.data(), quality))
+    throw Error("JPEG encoding failed", where);
+  atomic_write(path, [&](std::ostream& out) {
+    out.write(reinterpret_cast<const char*>(jpg.data()), static_cast<std::streamsize>(jpg.size()));
+  });
+}
+
+// PNG or JPEG by the file's extension (.png; .jpg or .jpeg, any case); any other is an error
+// naming the file, so an image is never written in a format its name does not say.
+inline void write_image(const std::filesystem::path& path, const Image<std::uint8_t>& img) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == ".png") return write_png(path, img);
+  if (ext == ".jpg" || ext == ".jpeg") return write_jpg(path, img);
+  throw Error("unknown image format '" + ext + "': name the file .png, .jpg or .jpeg", path.string());
+}
+
 // Float image in [0,1] (clamped, rounded to 8 bits).
 inline void write_png(const std::filesystem::path& path, const ImageF& img) {
   if (img.data.size() != img.pixels() * static_cast<std::size_t>(img.channels))
@@ -127,33 +162,41 @@ inline Mask read_mask(const std::filesystem::path& path, int expected_width = -1
   detail::check_image_bytes(bytes, where);
   Mask m;
   std::size_t N = 0;
-  auto fill = [&](const auto* px) {
+  // PNG colour type 3 (IHDR byte 25): paletted, no compression noise, any non-black colour counts.
+  const bool paletted = bytes.size() > 25 && bytes[0] == 0x89 && bytes[1] == 'P' && bytes[25] == 3;
+  auto fill = [&](const auto* px, unsigned half) {
     m = Mask(w, h, 1);  // sized from the decoded image, not from the header alone
     N = m.pixels();
     const int colour = (n == 2 || n == 4) ? n - 1 : n;  // channels before alpha
-    bool any_colour = false;
+    unsigned colour_max = 0, alpha_max = 0;
+    for (std::size_t p = 0; p < N; ++p) {
+      for (int c = 0; c < colour; ++c) colour_max = std::max<unsigned>(colour_max, px[p * n + c]);
+      if (colour != n) alpha_max = std::max<unsigned>(alpha_max, px[p * n + colour]);
+    }
+    // Black everywhere: the alpha channel carries the mask.
+    const int channel0 = colour_max == 0 && colour != n ? colour : 0;
+    const int channels = colour_max == 0 && colour != n ? 1 : colour;
+    const unsigned value_max = channel0 == 0 ? colour_max : alpha_max;
+    const unsigned threshold = paletted || value_max == 1 ? 1 : half;  // 0/1 label masks: 1 is foreground
     for (std::size_t p = 0; p < N; ++p) {
       bool fg = false;
-      for (int c = 0; c < colour; ++c) fg = fg || px[p * n + c] != 0;
+      for (int c = channel0; c < channel0 + channels; ++c) fg = fg || px[p * n + c] >= threshold;
       m.data[p] = fg ? 255 : 0;
-      any_colour = any_colour || fg;
     }
-    if (!any_colour && colour != n)  // black everywhere: the alpha channel carries the mask
-      for (std::size_t p = 0; p < N; ++p) m.data[p] = px[p * n + colour] != 0 ? 255 : 0;
   };
   if (stbi_is_16_bit_from_memory(bytes.data(), len)) {
     int n2 = 0;
     stbi_us* px = stbi_load_16_from_memory(bytes.data(), len, &w, &h, &n2, 0);
     if (!px) throw Error("cannot read mask: " + detail::stb_reason(), where);
     n = n2;
-    fill(px);
+    fill(px, 32768u);
     stbi_image_free(px);
   } else {
     int n2 = 0;
     stbi_uc* px = stbi_load_from_memory(bytes.data(), len, &w, &h, &n2, 0);
     if (!px) throw Error("cannot read mask: " + detail::stb_reason(), where);
     n = n2;
-    fill(px);
+    fill(px, 128u);
     stbi_image_free(px);
   }
   return m;
