@@ -1,0 +1,68 @@
+// The browser flow run natively: the same Session, segmenter and parameters as the WebAssembly
+// build, for the browser test (same selection?) and the browser-vs-native benchmark.
+//   vcar_web_native --scene FILE [--cameras FILE] [--view NAME] --click U,V [--max-side N]
+//                   [--orbit-views N] [--out result.json]
+// Prints (and writes to --out) {"selected": n, "seconds": t, "indices": [...]}: the page's
+// #vcar-result format; seconds covers vcar::segment only, as in the page.
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <iterator>
+#include <sstream>
+#include <string>
+
+#include "web_flow.hpp"
+
+namespace {
+std::vector<std::uint8_t> slurp(const std::string& p) {
+  std::ifstream in(p, std::ios::binary);
+  if (!in) throw vcar::Error("cannot open", p);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string scene, cameras, view, click, out;
+  vcar::web::SegmentOptions opt;
+  for (int k = 1; k < argc; ++k) {
+    const std::string a = argv[k];
+    auto next = [&]() -> std::string {
+      if (k + 1 >= argc) { std::cerr << a << " needs a value\n"; std::exit(2); }
+      return argv[++k];
+    };
+    if (a == "--scene") scene = next();
+    else if (a == "--cameras") cameras = next();
+    else if (a == "--view") view = next();
+    else if (a == "--click") click = next();
+    else if (a == "--out") out = next();
+    else if (a == "--max-side") opt.max_side = std::stoi(next());
+    else if (a == "--orbit-views") opt.orbit_views = std::stoi(next());
+    else { std::cerr << "unknown argument " << a << "\n"; return 2; }
+  }
+  if (scene.empty() || click.empty()) {
+    std::cerr << "usage: vcar_web_native --scene FILE [--cameras FILE] [--view NAME] --click U,V [--out FILE]\n";
+    return 2;
+  }
+  try {
+    vcar::web::Session s;
+    s.load_scene(slurp(scene), scene);
+    if (!cameras.empty()) s.load_cameras(slurp(cameras), cameras);
+    const vcar::Camera ref = vcar::web::reference_view(s, view);
+    float u = 0, v = 0;
+    if (std::sscanf(click.c_str(), "%f,%f", &u, &v) != 2) throw vcar::Error("expected U,V", "--click " + click);
+    const auto t0 = std::chrono::steady_clock::now();
+    const vcar::SegmentationResult& r = s.segment(ref, u, v, opt);
+    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::ostringstream j;
+    j << "{\"selected\": " << r.indices.size() << ", \"seconds\": " << secs << ", \"indices\": [";
+    for (std::size_t i = 0; i < r.indices.size(); ++i) j << (i ? "," : "") << r.indices[i];
+    j << "]}";
+    std::cout << j.str() << "\n";
+    if (!out.empty()) std::ofstream(out) << j.str() << "\n";
+  } catch (const std::exception& e) {
+    std::cerr << "vcar_web_native: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,28 @@
+#pragma once
+// The unattended flow of the page's contract (`index.html?scene=&cameras=&view=&click=u,v`),
+// shared by the browser (vcar_wasm.cpp) and the native twin (vcar_web_native.cpp) so that both
+// pick the reference view and read the click the same way.
+//   - with cameras and view=NAME: the camera named NAME (vcar::Error when none is);
+//   - with cameras and no view: the first camera;
+//   - without cameras: Session::default_view at default_view_width x default_view_height.
+// The click is in pixels of that view.
+#include <string>
+
+#include "web_session.hpp"
+
+namespace vcar::web {
+
+inline constexpr int default_view_width = 640, default_view_height = 480;
+
+inline Camera reference_view(const Session& s, const std::string& view) {
+  if (s.cameras().empty()) {
+    if (!view.empty() && view != "default") throw Error("view '" + view + "' named but no cameras loaded", "view");
+    return s.default_view(default_view_width, default_view_height);
+  }
+  if (view.empty()) return s.cameras().front();
+  for (const Camera& c : s.cameras())
+    if (c.name == view) return c;
+  throw Error("no camera named '" + view + "'", "view");
+}
+
+}  // namespace vcar::web

@@ -1,0 +1,233 @@
+#pragma once
+// The state behind vcar's JavaScript API (vcar_wasm.cpp) and its native twin (vcar_web_native.cpp):
+// a scene, its cameras, one segmentation and the files written from it. Everything here is plain
+// C++ on vcar::vcar and vcar::io, so the browser build and the native build run the same code.
+//
+// Flow: load_scene(bytes) -> load_cameras(bytes) (optional) -> segment(reference, click) ->
+// indices / scores / log-scales -> object_ply / removed_ply / state_ply (bytes).
+// Files are read and written through a scratch folder (emscripten's in-memory file system in the
+// browser), because vcar::io reads by path and decides the format by content.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <numeric>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "region_grow_segmenter.hpp"
+#include "vcar/algo/pipeline.hpp"
+#include "vcar/backends/cpu/tiled_renderer.hpp"
+#include "vcar/io/cameras.hpp"
+#include "vcar/io/ply.hpp"
+#include "vcar/io/scene_file.hpp"
+#include "vcar/io/state_ply.hpp"
+
+namespace vcar::web {
+
+// A mask source written by the host (the browser's JavaScript hook, docs/web.md): called once
+// per frame with the frame's camera and 8-bit render; returns the mask or nothing (no evidence).
+using FrameMaskFn = std::function<std::optional<Mask>(std::size_t frame, const Camera&, const ImageRGB8&, const Prompt&)>;
+
+struct SegmentOptions {
+  int max_side = 400;       // vcar renders the views at most this many pixels on the long side
+  int orbit_views = 16;     // views around the clicked point when no cameras were loaded
+  RegionGrowOptions grow{};
+};
+
+class Session {
+public:
+  explicit Session(std::filesystem::path scratch = std::filesystem::temp_directory_path() / "vcar-web")
+      : dir_(std::move(scratch)) { std::filesystem::create_directories(dir_); }
+
+  // Any format vcar::io::read_scene reads (by content; `name` matters only for .splat).
+  // SPZ v2/v3 may also come already gunzipped (the browser inflates with DecompressionStream).
+  std::size_t load_scene(const std::vector<std::uint8_t>& bytes, const std::string& name) {
+    const auto path = dir_ / ("scene" + std::filesystem::path(name).extension().string());
+    write_file(path, bytes);
+    if (bytes.size() >= 16 && io::detail::load_u32(bytes.data()) == io::spz_magic &&
+        io::detail::load_u32(bytes.data() + 4) < 4) {
+      const io::detail::SpzHeader h = io::detail::check_spz_header(bytes.data(), name);
+      scene_ = io::detail::decode_spz_arrays(h, bytes.data() + 16, -1.f, 1.f, name);
+    } else {
+      scene_ = io::read_scene(path, &format_);
+    }
+    std::filesystem::remove(path);
+    if (scene_.empty()) throw Error("the scene has no Gaussians", name);
+    result_.reset();
+    return scene_.size();
+  }
+
+  // cameras.json (Inria) or transforms.json (nerfstudio/Blender with w, h).
+  std::size_t load_cameras(const std::vector<std::uint8_t>& bytes, const std::string& name) {
+    const auto path = dir_ / (std::filesystem::path(name).extension() == ".json" ? "cameras.json" : name);
+    write_file(path, bytes);
+    cameras_ = io::read_cameras(path);
+    std::filesystem::remove(path);
+    for (const Camera& c : cameras_) c.validate();
+    return cameras_.size();
+  }
+  void clear_cameras() { cameras_.clear(); }
+
+  const GaussianScene& scene() const { return scene_; }
+  const std::vector<Camera>& cameras() const { return cameras_; }
+  const char* format_name() const { return io::scene_format_name(format_); }
+
+  // A view of the whole scene when the user brings no camera: from the robust centre (median of
+  // the means), at a distance that fits the central 90% of the Gaussians in a 50 degree field of
+  // view, looking along +z with -y up (the OpenCV axes 3DGS training uses).
+  Camera default_view(int width, int height) const {
+    require_scene();
+    Eigen::Vector3f c;
+    for (int d = 0; d < 3; ++d) c[d] = median(scene_.mean[d]);
+    std::vector<float> r(scene_.size());
+    for (std::size_t i = 0; i < r.size(); ++i) r[i] = (scene_.mu(i) - c).norm();
+    std::nth_element(r.begin(), r.begin() + r.size() * 9 / 10, r.end());
+    const float radius = std::max(r[r.size() * 9 / 10], 1e-3f);
+    const float f = 0.5f * static_cast<float>(std::max(width, height)) / std::tan(0.5f * 50.f * 3.14159265f / 180.f);
+    Intrinsics k{width, height, f, f, 0.5f * width, 0.5f * height};
+    return Camera::look_at(c - Eigen::Vector3f(0, 0, 3.f * radius), c, Eigen::Vector3f(0, -1, 0), k, "default");
+  }
+
+  // Segments the object under pixel (u, v) of `reference` (pixels of reference's own size).
+  // With cameras loaded, they are the training views and `reference` is added as the prompt
+  // view (it may be one of them); without cameras, `options.orbit_views` views circle the
+  // clicked point at the reference's distance. Views are rendered at most max_side pixels wide.
+  // With `custom`, the masks come from it instead of the region-growing segmenter.
+  const SegmentationResult& segment(const Camera& reference, float u, float v, const SegmentOptions& options = {},
+                                    const ProgressCallback& progress = {}, const FrameMaskFn& custom = {}) {
+    require_scene();
+    reference.validate();
+    const float s = std::min(1.f, static_cast<float>(options.max_side) / static_cast<float>(std::max(reference.width, reference.height)));
+    const Camera ref = scaled(reference, s);
+    cpu::TiledRenderer base;
+    DepthKeepingRenderer<cpu::TiledRenderer> renderer(base);
+    RegionGrowSegmenter<cpu::TiledRenderer> segmenter(renderer, options.grow);
+    std::vector<Camera> views;
+    Prompt prompt;
+    prompt.points = {Eigen::Vector2f(u * s, v * s)};
+    prompt.point_labels = {1};
+    if (!cameras_.empty()) {
+      views.push_back(ref);
+      for (const Camera& c : cameras_)
+        if (!(c.name == reference.name && c.R_w.isApprox(reference.R_w) && c.t_w.isApprox(reference.t_w)))
+          views.push_back(scaled(c, std::min(1.f, static_cast<float>(options.max_side) / static_cast<float>(std::max(c.width, c.height)))));
+    } else {
+      views = orbit_around_click(ref, prompt.points[0], renderer, options.orbit_views);
+    }
+    prompt.reference_view = 0;
+    views_ = views;
+    if (custom) {
+      auto host = make_streaming_segmenter([&](const FrameSequence& f, const Prompt& p, const MaskSink& sink) {
+        for (std::size_t k = 0; k < f.size(); ++k) {
+          const std::optional<Mask> m = custom(k, f.cameras[k], f.image(k), p);
+          sink(k, m ? &*m : nullptr);
+        }
+      });
+      result_ = vcar::segment(scene_, views, prompt, renderer, host, VcarParams::robust(), progress);
+    } else {
+      result_ = vcar::segment(scene_, views, prompt, renderer, segmenter, VcarParams::robust(), progress);
+    }
+    return *result_;
+  }
+
+  const SegmentationResult& result() const {
+    if (!result_) throw Error("no segmentation yet: call segment first", "result");
+    return *result_;
+  }
+  const std::vector<Camera>& views() const { return views_; }
+
+  // The selected Gaussians with their refined log-scales (ABR), as Inria PLY bytes.
+  std::vector<std::uint8_t> object_ply() { return write_and_read([&](const auto& p) { io::write_ply(p, scene_, result().indices, &result().log_scale); }); }
+  // Every Gaussian but the selection (the scene with the object deleted).
+  std::vector<std::uint8_t> removed_ply() {
+    std::vector<Index> rest;
+    std::vector<bool> sel(scene_.size(), false);
+    for (Index i : result().indices) sel[i] = true;
+    for (std::size_t i = 0; i < sel.size(); ++i)
+      if (!sel[i]) rest.push_back(static_cast<Index>(i));
+    return write_and_read([&](const auto& p) { io::write_ply(p, scene_, rest); });
+  }
+  // The whole scene with SuperSplat's `state` byte: bit 0 (selected) on the selection.
+  std::vector<std::uint8_t> state_ply() {
+    return write_and_read([&](const auto& p) { io::write_state_ply(p, scene_, io::selection_state(scene_.size(), result().indices)); });
+  }
+
+private:
+  static Camera scaled(const Camera& c, float s) {
+    if (s >= 1.f) return c;
+    Camera o = c;
+    o.width = std::max(1, static_cast<int>(std::lround(c.width * s)));
+    o.height = std::max(1, static_cast<int>(std::lround(c.height * s)));
+    o.fx = c.fx * s; o.fy = c.fy * s; o.cx = c.cx * s; o.cy = c.cy * s;
+    return o;
+  }
+
+  // Views around the clicked point: the click lifted with the reference's rendered depth, then
+  // `n` cameras on two rings (at the reference's elevation and 30 degrees above it, 2:1) at the
+  // reference's distance, looking at the point, the reference's intrinsics, up = its up.
+  std::vector<Camera> orbit_around_click(const Camera& ref, const Eigen::Vector2f& click,
+                                         DepthKeepingRenderer<cpu::TiledRenderer>& renderer, int n) const {
+    RenderRequest q;
+    q.scene = &scene_;
+    q.camera = &ref;
+    (void)renderer.render(q);
+    const auto p = RegionGrowSegmenter<cpu::TiledRenderer>::lift(
+        ref, renderer.depth(), renderer.alpha(), static_cast<int>(click[0]), static_cast<int>(click[1]));
+    if (!p) throw Error("the clicked pixel shows no Gaussian (alpha < 0.5): click on the object", "prompt");
+    const Eigen::Vector3f up = ref.up();
+    const Eigen::Vector3f off = ref.position() - *p;
+    const float dist = off.norm();
+    Eigen::Vector3f h = off - off.dot(up) * up;  // horizontal direction to the reference
+    if (h.squaredNorm() < 1e-12f) h = ref.right().cross(up);
+    h.normalize();
+    const Eigen::Vector3f side = up.cross(h);
+    const float elev0 = std::asin(std::clamp(off.dot(up) / dist, -1.f, 1.f));
+    std::vector<Camera> views{ref};
+    const int n_low = std::max(1, n * 2 / 3), n_high = std::max(0, n - n_low);
+    auto ring = [&](int count, float elev, int skip) {  // skip: the reference's own azimuth
+      for (int k = skip; k < count + skip; ++k) {
+        const float az = 2.f * 3.14159265f * static_cast<float>(k) / static_cast<float>(count + skip);
+        const Eigen::Vector3f dir = std::cos(elev) * (std::cos(az) * h + std::sin(az) * side) + std::sin(elev) * up;
+        views.push_back(Camera::look_at(*p + dist * dir, *p, up, ref.intrinsics(), "orbit_" + std::to_string(views.size())));
+      }
+    };
+    ring(n_low, elev0, 1);
+    ring(n_high, std::min(elev0 + 0.5236f, 1.3f), 0);
+    return views;
+  }
+
+  void require_scene() const { if (scene_.empty()) throw Error("no scene loaded: call load_scene first", "session"); }
+  static float median(std::vector<float> v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  }
+  static void write_file(const std::filesystem::path& p, const std::vector<std::uint8_t>& b) {
+    std::ofstream o(p, std::ios::binary);
+    o.write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
+    if (!o) throw Error("cannot write scratch file", p.string());
+  }
+  template <class F>
+  std::vector<std::uint8_t> write_and_read(F&& write) {
+    const auto p = dir_ / "out.ply";
+    write(p);
+    std::ifstream in(p, std::ios::binary);
+    std::vector<std::uint8_t> b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::filesystem::remove(p);
+    return b;
+  }
+
+  std::filesystem::path dir_;
+  GaussianScene scene_;
+  io::SceneFormat format_ = io::SceneFormat::ply;
+  std::vector<Camera> cameras_, views_;
+  std::optional<SegmentationResult> result_;
+};
+
+}  // namespace vcar::web

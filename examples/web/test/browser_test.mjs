@@ -1,0 +1,125 @@
+// Drives Debian's headless Chromium (puppeteer-core, no browser download) against
+// examples/web/dist on real trained Gaussians, and checks the page's selection against the
+// native twin (vcar_web_native: the same Session, segmenter and parameters, built for x86-64).
+//
+//   node test/browser_test.mjs --native BUILD/vcar_web_native --scene tests/data/donut.ply \
+//        --click 200,240 [--cameras cams.json --view NAME] [--screenshots docs/figures] [--min-iou 0.98]
+//
+// Checks: the page writes {"selected", "seconds", "indices"} into #vcar-result; the selection is
+// not empty and not the whole scene; its Jaccard overlap with the native selection is at least
+// --min-iou; the PLY bytes the page offers have the right vertex counts (object = selected,
+// removed = n - selected, state PLY = n with exactly `selected` state bytes with bit 0 set).
+// Prints one JSON line with the numbers (browser and native seconds of the same run).
+import http from 'node:http';
+import fs from 'node:fs';
+import path from 'node:path';
+import { execFileSync } from 'node:child_process';
+import { fileURLToPath } from 'node:url';
+import puppeteer from 'puppeteer-core';
+
+const here = path.dirname(fileURLToPath(import.meta.url));
+const dist = path.resolve(here, '..', 'dist');
+const args = Object.fromEntries(process.argv.slice(2).reduce((a, v, i, all) => (v.startsWith('--') ? [...a, [v.slice(2), all[i + 1]]] : a), []));
+const need = (k) => { if (!args[k]) { console.error(`missing --${k}`); process.exit(2); } return args[k]; };
+const scene = path.resolve(need('scene'));
+const click = need('click');
+const native = path.resolve(need('native'));
+const minIou = Number(args['min-iou'] ?? 0.98);
+const timeoutMs = Number(args.timeout ?? 300) * 1000;
+const chromium = args.chromium ?? '/usr/bin/chromium';
+
+// A static server: dist/ at /, the inputs at /input/<name>.
+const inputs = { [path.basename(scene)]: scene };
+if (args.cameras) inputs[path.basename(args.cameras)] = path.resolve(args.cameras);
+const types = { '.html': 'text/html', '.js': 'text/javascript', '.css': 'text/css', '.json': 'application/json' };
+const server = http.createServer((req, res) => {
+  const url = decodeURIComponent(req.url.split('?')[0]);
+  const file = url.startsWith('/input/') ? inputs[url.slice(7)] : path.join(dist, path.normalize(url === '/' ? '/index.html' : url));
+  if (!file || (!url.startsWith('/input/') && !file.startsWith(dist)) || !fs.existsSync(file)) { res.writeHead(404); res.end(); return; }
+  res.writeHead(200, { 'Content-Type': types[path.extname(file)] ?? 'application/octet-stream' });
+  fs.createReadStream(file).pipe(res);
+});
+await new Promise((r) => server.listen(0, '127.0.0.1', r));
+const base = `http://127.0.0.1:${server.address().port}`;
+
+function fail(msg) { console.error('FAIL: ' + msg); process.exitCode = 1; }
+
+const browser = await puppeteer.launch({
+  executablePath: chromium, headless: true,
+  args: ['--no-sandbox', '--enable-unsafe-swiftshader', '--use-angle=swiftshader', '--ignore-gpu-blocklist', '--window-size=1200,700'],
+  defaultViewport: { width: 1200, height: 700 },
+});
+const out = {};
+try {
+  const page = await browser.newPage();
+  const logs = [];
+  page.on('console', (m) => logs.push(m.text()));
+  page.on('pageerror', (e) => logs.push('pageerror: ' + e.message));
+  let q = `scene=/input/${encodeURIComponent(path.basename(scene))}`;
+  if (args.cameras) q += `&cameras=/input/${encodeURIComponent(path.basename(args.cameras))}`;
+  if (args.view) q += `&view=${encodeURIComponent(args.view)}`;
+  const shots = args.screenshots ? path.resolve(args.screenshots) : null;
+
+  if (shots) {  // before: the scene in the viewer, nothing selected
+    await page.goto(`${base}/index.html?${q}`);
+    await page.waitForFunction(() => /Gaussians/.test(document.getElementById('status').textContent), { timeout: timeoutMs });
+    await new Promise((r) => setTimeout(r, 4000));
+    await page.screenshot({ path: path.join(shots, 'web_before.png') });
+  }
+  await page.goto(`${base}/index.html?${q}&click=${click}`);
+  await page.waitForFunction(() => document.getElementById('vcar-result').textContent.length > 0, { timeout: timeoutMs, polling: 500 });
+  const result = JSON.parse(await page.$eval('#vcar-result', (e) => e.textContent));
+  if (result.error) throw new Error('page: ' + result.error + '\n' + logs.join('\n'));
+  if (shots) {
+    await new Promise((r) => setTimeout(r, 3000));
+    await page.screenshot({ path: path.join(shots, 'web_after.png') });
+    await page.evaluate(() => window.vcarPage.display('isolate'));
+    await new Promise((r) => setTimeout(r, 3000));
+    await page.screenshot({ path: path.join(shots, 'web_isolate.png') });
+  }
+  // The PLY files the page offers for download.
+  const header = async (kind) => page.evaluate(async (k) => {
+    const r = await window.vcarPage.call({ type: 'ply', kind: k });
+    const b = new Uint8Array(r.bytes);
+    const text = new TextDecoder('latin1').decode(b.subarray(0, 4096));
+    const end = text.indexOf('end_header\n') + 'end_header\n'.length;
+    const n = Number(/element vertex (\d+)/.exec(text)[1]);
+    const props = [...text.slice(0, end).matchAll(/property (\w+) (\w+)/g)].map((m) => [m[1], m[2]]);
+    let state = null;
+    if (props.length && props[props.length - 1][1] === 'state') {  // uchar last: stride = 4 * (props - 1) + 1
+      const stride = 4 * (props.length - 1) + 1;
+      state = 0;
+      for (let i = 0; i < n; ++i) state += b[end + i * stride + stride - 1] & 1;
+    }
+    return { n, state };
+  }, kind);
+  const obj = await header('object'), rem = await header('removed'), st = await header('state');
+
+  const nat = JSON.parse(execFileSync(native, ['--scene', scene, '--click', click,
+    ...(args.cameras ? ['--cameras', path.resolve(args.cameras)] : []), ...(args.view ? ['--view', args.view] : [])],
+    { encoding: 'utf8', stdio: ['ignore', 'pipe', 'inherit'] }));
+  const a = new Set(result.indices), b = new Set(nat.indices);
+  let inter = 0;
+  for (const i of a) inter += b.has(i);
+  const iou = inter / (a.size + b.size - inter || 1);
+  const total = obj.n + rem.n;
+  Object.assign(out, {
+    scene: path.basename(scene), click, view: args.view ?? null, gaussians: total,
+    browser_selected: result.selected, native_selected: nat.selected, identical: inter === a.size && a.size === b.size,
+    jaccard: Number(iou.toFixed(5)), browser_seconds: Number(result.seconds.toFixed(3)),
+    native_seconds: Number(nat.seconds.toFixed(3)), ratio: Number((result.seconds / nat.seconds).toFixed(2)),
+    simd: result.simd, ply: { object: obj.n, removed: rem.n, state_n: st.n, state_selected: st.state },
+  });
+  if (!(result.selected > 0 && result.selected < total)) fail(`selection of ${result.selected} of ${total} Gaussians`);
+  if (result.indices.length !== result.selected) fail('indices and selected disagree');
+  if (iou < minIou) fail(`Jaccard overlap with the native selection ${iou.toFixed(4)} < ${minIou}`);
+  if (obj.n !== result.selected) fail(`object.ply has ${obj.n} vertices, ${result.selected} selected`);
+  if (rem.n !== total - result.selected || st.n !== total) fail(`removed.ply ${rem.n} / state PLY ${st.n} vertices for ${total}`);
+  if (st.state !== result.selected) fail(`state PLY marks ${st.state} selected, ${result.selected} expected`);
+} catch (e) {
+  fail(e.message);
+} finally {
+  await browser.close();
+  server.close();
+}
+console.log(JSON.stringify(out));

@@ -1,0 +1,261 @@
+// vcar's web page: a Spark (three.js) splat viewer, vcar in a Web Worker, click to select.
+// Unattended contract (docs/web.md): index.html?scene=URL&cameras=URL&view=NAME&click=u,v runs
+// the whole flow and writes {"selected": n, "seconds": t, "indices": [...]} into #vcar-result.
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { SparkRenderer, SplatMesh } from '@sparkjsdev/spark';
+
+const $ = (id) => document.getElementById(id);
+const params = new URLSearchParams(location.search);
+const status = (s) => { $('status').textContent = s; };
+
+// ---- the worker: one request at a time -----------------------------------------------------
+const worker = new Worker('worker.js');
+let pending = null;
+let workerReady;
+const readyPromise = new Promise((r) => { workerReady = r; });
+worker.onmessage = (ev) => {
+  const m = ev.data;
+  if (m.type === 'ready') { workerReady(m); return; }
+  if (m.type === 'progress') { onProgress(m); return; }
+  const p = pending;
+  pending = null;
+  if (!p) return;
+  if (m.type === 'error') p.reject(new Error(m.message));
+  else p.resolve(m);
+};
+worker.onerror = (e) => { if (pending) { pending.reject(new Error(e.message)); pending = null; } };
+function call(msg, transfer = []) {
+  if (pending) return Promise.reject(new Error('vcar is busy'));
+  return new Promise((resolve, reject) => { pending = { resolve, reject }; worker.postMessage(msg, transfer); });
+}
+
+function onProgress(p) {
+  const frac = { 'coarse': 0, 'view_completeness': 0.45, 'sss': 0.47, 'abr': 0.96, 'done': 1 };
+  let f = frac[p.stage] ?? 0;
+  if (p.stage === 'coarse round') f = 0.45 * p.view / p.views;
+  if (p.stage === 'fine round') f = 0.47 + 0.49 * p.view / p.views;
+  $('progress').value = f;
+  status(`${p.stage}${p.views ? ` ${p.view}/${p.views}` : ''} (${p.elapsed.toFixed(1)} s)`);
+}
+
+// ---- the viewer (WebGL; the flow runs without it where WebGL is missing) --------------------
+const canvas = $('canvas');
+let renderer = null, camera = null, controls = null, world = null, mesh = null, original = null;
+try {
+  renderer = new THREE.WebGLRenderer({ canvas, antialias: false, preserveDrawingBuffer: true });
+  world = new THREE.Scene();
+  camera = new THREE.PerspectiveCamera(50, 4 / 3, 0.01, 1000);
+  world.add(new SparkRenderer({ renderer }));
+  controls = new OrbitControls(camera, canvas);
+  renderer.setAnimationLoop(() => { controls.update(); renderer.render(world, camera); });
+} catch (e) {
+  renderer = null;
+  status('no WebGL: the viewer is off, vcar still runs (' + e.message + ')');
+}
+
+function fitCanvas(aspect) {
+  const box = $('viewer').getBoundingClientRect();
+  let w = box.width, h = box.width / aspect;
+  if (h > box.height) { h = box.height; w = h * aspect; }
+  w = Math.floor(w); h = Math.floor(h);
+  canvas.style.width = w + 'px'; canvas.style.height = h + 'px';
+  if (renderer) renderer.setSize(w, h, false);
+  if (camera) { camera.aspect = w / h; camera.updateProjectionMatrix(); }
+}
+
+// vcar cameras are OpenCV (x right, y down, z forward; R, t world-to-camera); three's camera
+// looks down -z with y up: right = R row 0, up = -R row 1, backward = -R row 2.
+function setViewerCamera(c) {
+  fitCanvas(c.width / c.height);
+  if (!camera) return;
+  const row = (i) => new THREE.Vector3(c.R[3 * i], c.R[3 * i + 1], c.R[3 * i + 2]);
+  const right = row(0), up = row(1).negate(), back = row(2).negate();
+  const t = new THREE.Vector3(c.t[0], c.t[1], c.t[2]);
+  const pos = new THREE.Vector3(
+    -(c.R[0] * t.x + c.R[3] * t.y + c.R[6] * t.z),
+    -(c.R[1] * t.x + c.R[4] * t.y + c.R[7] * t.z),
+    -(c.R[2] * t.x + c.R[5] * t.y + c.R[8] * t.z));
+  camera.position.copy(pos);
+  camera.quaternion.setFromRotationMatrix(new THREE.Matrix4().makeBasis(right, up, back));
+  camera.up.copy(up);
+  camera.fov = 2 * Math.atan(0.5 * c.height / c.fy) * 180 / Math.PI;
+  camera.updateProjectionMatrix();
+  let d = 1;
+  if (mesh) {
+    const centre = mesh.getBoundingBox(true).getCenter(new THREE.Vector3());
+    d = Math.max(1e-3, centre.clone().sub(pos).dot(back.clone().negate()));
+  }
+  controls.target.copy(pos.clone().addScaledVector(back, -d));
+  controls.update();
+  camera.quaternion.setFromRotationMatrix(new THREE.Matrix4().makeBasis(right, up, back));
+}
+
+// The viewer's current camera as a vcar camera of the canvas' CSS size.
+function viewerCameraToVcar() {
+  const w = canvas.clientWidth, h = canvas.clientHeight;
+  const fy = 0.5 * h / Math.tan(0.5 * camera.fov * Math.PI / 180);
+  camera.updateMatrixWorld();
+  const e = camera.matrixWorld.elements;  // column-major: columns right, up, back, position
+  const right = [e[0], e[1], e[2]], down = [-e[4], -e[5], -e[6]], fwd = [-e[8], -e[9], -e[10]];
+  const R = [...right, ...down, ...fwd];
+  const p = [e[12], e[13], e[14]];
+  const t = [0, 1, 2].map((i) => -(R[3 * i] * p[0] + R[3 * i + 1] * p[1] + R[3 * i + 2] * p[2]));
+  return { name: 'viewer', width: w, height: h, fx: fy, fy, cx: w / 2, cy: h / 2, R, t };
+}
+
+async function showScene(bytes, name) {
+  if (!renderer) return;
+  if (mesh) { world.remove(mesh); mesh.dispose(); mesh = null; original = null; }
+  mesh = new SplatMesh({ fileBytes: bytes, fileName: name });
+  world.add(mesh);
+  await mesh.initialized;
+  if (mesh.packedSplats && mesh.packedSplats.packedArray)
+    original = mesh.packedSplats.packedArray.slice();
+}
+
+// ---- selection display: highlight, delete, isolate (Spark's packed RGBA8 in word 0) ---------
+let selection = null;
+function display(mode) {
+  if (!mesh || !original || !selection) return;
+  const arr = mesh.packedSplats.packedArray;
+  arr.set(original);
+  const n = mesh.packedSplats.numSplats;
+  const sel = new Uint8Array(n);
+  for (const i of selection) if (i < n) sel[i] = 1;
+  for (let i = 0; i < n; ++i) {
+    const w = arr[4 * i];
+    let r = w & 255, g = (w >>> 8) & 255, b = (w >>> 16) & 255, a = w >>> 24;
+    if (mode === 'highlight' && sel[i]) { r = r >> 2; g = (g + 255) >> 1; b = (b + 160) >> 1; }  // towards green-cyan
+    if ((mode === 'delete' && sel[i]) || (mode === 'isolate' && !sel[i])) a = 0;
+    arr[4 * i] = (r | (g << 8) | (b << 16) | (a << 24)) >>> 0;
+  }
+  mesh.packedSplats.needsUpdate = true;
+  if (mesh.updateVersion) mesh.updateVersion();
+}
+
+// ---- the flow ---------------------------------------------------------------------------------
+let sceneName = 'scene.ply';
+async function loadScene(bytes, name) {
+  sceneName = name;
+  status('reading ' + name + '...');
+  const viewerCopy = bytes.slice();
+  const r = await call({ type: 'scene', bytes: bytes.buffer, name }, [bytes.buffer]);
+  status(`${r.n.toLocaleString()} Gaussians (${r.format})`);
+  try { await showScene(viewerCopy, name); } catch (e) { status('viewer: ' + e.message); }
+  selection = null;
+  enableResultButtons(false);
+  return r;
+}
+async function loadCameras(bytes, name) {
+  const r = await call({ type: 'cameras', bytes: bytes ? bytes.buffer : null, name }, bytes ? [bytes.buffer] : []);
+  const sel = $('view-select');
+  sel.innerHTML = '<option value="">(default)</option>' + r.names.map((n) => `<option>${n}</option>`).join('');
+  return r;
+}
+async function referenceView(name) { return (await call({ type: 'view', name })).camera; }
+
+async function segment(cam, u, v, options = {}) {
+  const marker = $('marker');
+  const rect = canvas.getBoundingClientRect(), vrect = $('viewer').getBoundingClientRect();
+  marker.style.left = (rect.left - vrect.left + u * rect.width / cam.width) + 'px';
+  marker.style.top = (rect.top - vrect.top + v * rect.height / cam.height) + 'px';
+  marker.hidden = false;
+  $('progress').value = 0;
+  const r = await call({ type: 'segment', camera: cam, u, v, options });
+  selection = r.indices;
+  display('highlight');
+  enableResultButtons(true);
+  const d = r.diagnostics;
+  status(`selected ${r.indices.length.toLocaleString()} Gaussians in ${r.seconds.toFixed(2)} s`);
+  $('details').textContent = JSON.stringify({ simd: simdPath, ...d }, null, 1);
+  return r;
+}
+
+function enableResultButtons(on) {
+  for (const id of ['btn-delete', 'btn-isolate', 'btn-show', 'dl-object', 'dl-removed', 'dl-state']) $(id).disabled = !on;
+}
+async function download(kind) {
+  const r = await call({ type: 'ply', kind });
+  const stem = sceneName.replace(/\.[^.]*$/, '');
+  const name = kind === 'object' ? 'object.ply' : kind === 'removed' ? 'removed.ply' : `${stem}.state.ply`;
+  const a = document.createElement('a');
+  a.href = URL.createObjectURL(new Blob([r.bytes], { type: 'application/octet-stream' }));
+  a.download = name;
+  a.click();
+  setTimeout(() => URL.revokeObjectURL(a.href), 10000);
+}
+
+$('btn-delete').onclick = () => display('delete');
+$('btn-isolate').onclick = () => display('isolate');
+$('btn-show').onclick = () => display('highlight');
+$('dl-object').onclick = () => download('object');
+$('dl-removed').onclick = () => download('removed');
+$('dl-state').onclick = () => download('state');
+$('scene-file').onchange = async (e) => {
+  const f = e.target.files[0];
+  if (!f) return;
+  try {
+    await loadScene(new Uint8Array(await f.arrayBuffer()), f.name);
+    setViewerCamera(await referenceView($('view-select').value));
+  } catch (err) { status('error: ' + err.message); }
+};
+$('cameras-file').onchange = async (e) => {
+  const f = e.target.files[0];
+  if (!f) return;
+  try { await loadCameras(new Uint8Array(await f.arrayBuffer()), f.name); } catch (err) { status('error: ' + err.message); }
+};
+$('view-select').onchange = async () => {
+  try { setViewerCamera(await referenceView($('view-select').value)); } catch (err) { status('error: ' + err.message); }
+};
+
+// Click (not drag) on the canvas: segment from the viewer's current camera.
+let down = null;
+canvas.addEventListener('pointerdown', (e) => { down = [e.offsetX, e.offsetY]; });
+canvas.addEventListener('pointerup', async (e) => {
+  if (!down || !camera || Math.hypot(e.offsetX - down[0], e.offsetY - down[1]) > 4) return;
+  try { await segment(viewerCameraToVcar(), e.offsetX, e.offsetY); } catch (err) { status('error: ' + err.message); }
+});
+
+// For tests and scripting: the worker protocol (docs/web.md) and the current selection.
+window.vcarPage = { call, display, selection: () => selection };
+
+let simdPath = '';
+async function unattended() {
+  const t0 = performance.now();
+  const fetchBytes = async (url) => {
+    const r = await fetch(url);
+    if (!r.ok) throw new Error(`${url}: HTTP ${r.status}`);
+    return new Uint8Array(await r.arrayBuffer());
+  };
+  const sceneUrl = params.get('scene');
+  await loadScene(await fetchBytes(sceneUrl), sceneUrl.split('/').pop().split('?')[0]);
+  if (params.get('cameras')) {
+    const u = params.get('cameras');
+    await loadCameras(await fetchBytes(u), u.split('/').pop().split('?')[0]);
+  }
+  const cam = await referenceView(params.get('view') || '');
+  $('view-select').value = params.get('view') || '';
+  setViewerCamera(cam);
+  const click = params.get('click');
+  if (!click) return;
+  const [u, v] = click.split(',').map(Number);
+  const opts = {};
+  if (params.get('maxSide')) opts.maxSide = Number(params.get('maxSide'));
+  const r = await segment(cam, u, v, opts);
+  await new Promise((res) => requestAnimationFrame(() => requestAnimationFrame(res)));  // the highlight is drawn
+  $('vcar-result').textContent = JSON.stringify({
+    selected: r.indices.length, seconds: r.seconds, indices: Array.from(r.indices),
+    simd: simdPath, page_seconds: (performance.now() - t0) / 1000,
+  });
+}
+
+readyPromise.then(async (m) => {
+  simdPath = m.simd;
+  status('vcar ready (' + m.simd + '): load a scene');
+  if (!params.get('scene')) return;
+  try { await unattended(); } catch (e) {
+    status('error: ' + e.message);
+    $('vcar-result').textContent = JSON.stringify({ error: e.message });
+  }
+});

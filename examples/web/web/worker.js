@@ -1,0 +1,84 @@
+// vcar in a Web Worker: the page posts scene and camera bytes and a click; vcar (WebAssembly,
+// vcar.js) segments and posts progress, then the selection. One request at a time.
+//
+// Messages in:  {type: 'scene', bytes, name} | {type: 'cameras', bytes, name} | {type: 'view', name}
+//               {type: 'default-view', width, height}
+//               {type: 'segment', camera, u, v, options} | {type: 'ply', kind: 'object'|'removed'|'state'}
+// Messages out: {type: 'ready', simd} | {type: 'progress', stage, view, views, elapsed}
+//               {type: 'scene', n, format} | {type: 'cameras', names} | {type: 'view', camera}
+//               {type: 'result', indices, scores, logScales, diagnostics, seconds}
+//               {type: 'ply', kind, bytes} | {type: 'error', message, request}
+importScripts('vcar.js');
+
+let vcar = null, session = null;
+const ready = createVcar().then((m) => {
+  vcar = m;
+  session = new vcar.Session();
+  postMessage({ type: 'ready', simd: vcar.simdPath() });
+});
+
+// C++ exceptions arrive as a pointer (a number); vcar.exceptionMessage reads their what().
+function messageOf(e) {
+  if (typeof e === 'number' && vcar) return vcar.exceptionMessage(e);
+  return e && e.message ? e.message : String(e);
+}
+
+// SPZ v2/v3 is one gzip stream: the browser inflates it (vcar's wasm build has no zlib).
+async function maybeGunzip(bytes) {
+  if (bytes.length >= 2 && bytes[0] === 0x1f && bytes[1] === 0x8b) {
+    const stream = new Blob([bytes]).stream().pipeThrough(new DecompressionStream('gzip'));
+    return new Uint8Array(await new Response(stream).arrayBuffer());
+  }
+  return bytes;
+}
+
+// Hook for a segmenter written in JavaScript (docs/web.md, "Bring your own SAM"): a script
+// imported here (options.segmenterScript, same origin) that defines
+//   self.vcarSegmenter = (frame) => Uint8Array (w*h, nonzero = object) | null
+// frame = {index, camera, width, height, rgb: Uint8Array (w*h*3), click: [u, v]}; frame 0 is the
+// reference view the click is on. It runs synchronously inside vcar::segment.
+function hostSegmenter(options) {
+  if (!options || !options.segmenterScript) return undefined;
+  importScripts(options.segmenterScript);
+  if (typeof self.vcarSegmenter !== 'function') throw new Error(options.segmenterScript + ' defines no self.vcarSegmenter');
+  return self.vcarSegmenter;
+}
+
+onmessage = async (ev) => {
+  const q = ev.data;
+  await ready;
+  try {
+    if (q.type === 'scene') {
+      const bytes = await maybeGunzip(new Uint8Array(q.bytes));
+      const n = session.loadScene(bytes, q.name);
+      postMessage({ type: 'scene', n, format: session.format() });
+    } else if (q.type === 'cameras') {
+      if (q.bytes) session.loadCameras(new Uint8Array(q.bytes), q.name);
+      else session.clearCameras();
+      postMessage({ type: 'cameras', names: session.cameraNames() });
+    } else if (q.type === 'view') {
+      postMessage({ type: 'view', camera: session.referenceView(q.name || '') });
+    } else if (q.type === 'default-view') {
+      postMessage({ type: 'view', camera: session.defaultView(q.width, q.height) });
+    } else if (q.type === 'segment') {
+      const t0 = performance.now();
+      const options = { ...(q.options || {}) };
+      const seg = hostSegmenter(options);
+      delete options.segmenterScript;
+      if (seg) options.segmenter = seg;
+      const diagnostics = session.segment(q.camera, q.u, q.v, options, (p) => {
+        postMessage({ type: 'progress', ...p });
+        return true;
+      });
+      const seconds = (performance.now() - t0) / 1000;
+      const indices = session.indices(), scores = session.scores(), logScales = session.logScales();
+      postMessage({ type: 'result', indices, scores, logScales, diagnostics, seconds },
+                  [indices.buffer, scores.buffer, logScales.buffer]);
+    } else if (q.type === 'ply') {
+      const bytes = q.kind === 'object' ? session.objectPly() : q.kind === 'removed' ? session.removedPly() : session.statePly();
+      postMessage({ type: 'ply', kind: q.kind, bytes }, [bytes.buffer]);
+    }
+  } catch (e) {
+    postMessage({ type: 'error', message: messageOf(e), request: q.type });
+  }
+};
