@@ -173,6 +173,9 @@ Matrices are returned as float32 (the model's precision).)doc")
                                std::copy(v, v + 9, p);
                                return K;
                              })
+      .def_property_readonly("intrinsics",
+                             [](const Camera& c) { return py::make_tuple(c.fx, c.fy, c.cx, c.cy); },
+                             "(fx, fy, cx, cy) in pixels")
       .def_property_readonly("world_to_camera", [](const Camera& c) { return matrix4(c.R_w, c.t_w); })
       .def_property_readonly("camera_to_world",
                              [](const Camera& c) { return matrix4(c.R_w.transpose(), c.position()); },

@@ -27,7 +27,7 @@ def test_k_and_world_to_camera_round_trip():
     W = world_to_camera(rotation([1, 2, 3], 0.7), [0.1, -0.2, 3.0])
     c = vcar.Camera(K, W, 160, 120, "v")
     assert (c.width, c.height, c.name) == (160, 120, "v")
-    assert (c.fx, c.fy, c.cx, c.cy) == (120.0, 110.0, 80.0, 60.0)
+    assert (c.fx, c.fy, c.cx, c.cy) == (120.0, 110.0, 80.0, 60.0) == c.intrinsics
     np.testing.assert_array_equal(c.K, K.astype(np.float32))
     np.testing.assert_array_equal(c.world_to_camera, W.astype(np.float32))
     assert c.world_to_camera.dtype == np.float32
