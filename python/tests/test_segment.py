@@ -51,7 +51,7 @@ def masks_from_folder(folder):
 
 # ---- identical to the command line ---------------------------------------------------------------
 
-@pytest.mark.parametrize("preset", ["nvos", "reference_code"])
+@pytest.mark.parametrize("preset", ["robust", "nvos", "reference_code"])
 def test_oracle_identical_to_cli(cli_dataset, tmp_path, preset):
     cli = cli_segment(cli_dataset, tmp_path / "out", "--oracle", cli_dataset, "--preset", preset)
     scene, cameras, prompt = dataset_inputs(cli_dataset)
