@@ -152,7 +152,8 @@ def main(argv=None):
         print("\r%-24s %4d/%-4d %6.1f s" % (p.stage, p.view, p.views, p.elapsed_s), end="", flush=True)
 
     result = vcar.segment(scene, cameras, {"reference_view": view, "points": points},
-                          sam2_segmenter(predictor), renderer=gsplat_renderer(scene, a.device),
+                          sam2_segmenter(predictor, autocast=a.device.startswith("cuda")),
+                          renderer=gsplat_renderer(scene, a.device),
                           params=a.preset, progress=progress)
     print()
     vcar.write_ply(a.out, scene, result["indices"], result["log_scales"])
