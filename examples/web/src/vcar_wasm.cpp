@@ -7,6 +7,7 @@
 //   s.loadCameras(bytes, "cameras.json");       // or transforms.json; optional
 //   const cam = s.referenceView("NAME");        // or s.defaultView(w, h), or a camera from the viewer
 //   s.segment(cam, u, v, {maxSide: 400}, p => postMessage(p));   // progress: {stage, view, views, elapsed}
+//   s.render(cam);                              // {width, height, rgb, alpha, depth}: vcar's own render
 //   s.indices(); s.scores(); s.logScales();     // Uint32Array, Float32Array, Float32Array (3 x n)
 //   s.objectPly(); s.removedPly(); s.statePly();// Uint8Array (Inria PLY; state PLY for SuperSplat)
 //
@@ -90,11 +91,12 @@ public:
         return !(r.isFalse());
       };
     // The JavaScript segmenter hook (docs/web.md): options.segmenter(frame) -> Uint8Array | null,
-    // frame = {index, camera, width, height, rgb (Uint8Array, w*h*3), click: [u, v]}.
+    // frame = {index, camera, width, height, rgb (Uint8Array, w*h*3), click: [u, v], fine}
+    // (fine: the fine round, whose frames render the coarse selection only).
     vcar::web::FrameMaskFn custom;
     if (options.typeOf().as<std::string>() == "object" && options["segmenter"].typeOf().as<std::string>() == "function") {
       const val fn = options["segmenter"];
-      custom = [fn](std::size_t k, const vcar::Camera& cam, const vcar::ImageRGB8& rgb, const vcar::Prompt& p) -> std::optional<vcar::Mask> {
+      custom = [fn](std::size_t k, const vcar::Camera& cam, const vcar::ImageRGB8& rgb, const vcar::Prompt& p, bool subset) -> std::optional<vcar::Mask> {
         val f = val::object();
         f.set("index", static_cast<int>(k));
         f.set("camera", camera_to_js(cam));
@@ -105,6 +107,7 @@ public:
         click.call<void>("push", p.points.front()[0]);
         click.call<void>("push", p.points.front()[1]);
         f.set("click", click);
+        f.set("fine", subset);
         const val m = fn(f);
         if (m.isNull() || m.isUndefined()) return std::nullopt;
         vcar::Mask mask(cam.width, cam.height, 1);
@@ -117,6 +120,19 @@ public:
     }
     const vcar::SegmentationResult& r = s_.segment(camera_from_js(camera), u, v, opt, cb, custom);
     return diagnostics_of(r);
+  }
+  // {width, height, rgb: Uint8Array (w*h*3), alpha: Float32Array, depth: Float32Array (expected depth)}
+  val render(const val& camera) const {
+    const vcar::RenderOutput out = s_.render(camera_from_js(camera));
+    std::vector<float> z(out.alpha.data.size());
+    for (std::size_t i = 0; i < z.size(); ++i) z[i] = out.alpha.data[i] > 0.f ? out.depth.data[i] / out.alpha.data[i] : 0.f;
+    val o = val::object();
+    o.set("width", out.rgb.width);
+    o.set("height", out.rgb.height);
+    o.set("rgb", typed_copy(vcar::to_8bit(out.rgb).data));
+    o.set("alpha", typed_copy(out.alpha.data));
+    o.set("depth", typed_copy(z));
+    return o;
   }
   val indices() const {
     const auto& ix = s_.result().indices;
@@ -186,6 +202,7 @@ EMSCRIPTEN_BINDINGS(vcar_web) {
       .function("referenceView", &JsSession::referenceView)
       .function("defaultView", &JsSession::defaultView)
       .function("segment", &JsSession::segment)
+      .function("render", &JsSession::render)
       .function("indices", &JsSession::indices)
       .function("scores", &JsSession::scores)
       .function("logScales", &JsSession::logScales)

@@ -32,8 +32,9 @@
 namespace vcar::web {
 
 // A mask source written by the host (the browser's JavaScript hook, docs/web.md): called once
-// per frame with the frame's camera and 8-bit render; returns the mask or nothing (no evidence).
-using FrameMaskFn = std::function<std::optional<Mask>(std::size_t frame, const Camera&, const ImageRGB8&, const Prompt&)>;
+// per frame with the frame's camera and 8-bit render, and whether the frame renders a subset (the
+// fine round renders G_coarse only); returns the mask or nothing (no evidence).
+using FrameMaskFn = std::function<std::optional<Mask>(std::size_t frame, const Camera&, const ImageRGB8&, const Prompt&, bool subset)>;
 
 struct SegmentOptions {
   int max_side = 400;       // vcar renders the views at most this many pixels on the long side
@@ -126,7 +127,7 @@ public:
     if (custom) {
       auto host = make_streaming_segmenter([&](const FrameSequence& f, const Prompt& p, const MaskSink& sink) {
         for (std::size_t k = 0; k < f.size(); ++k) {
-          const std::optional<Mask> m = custom(k, f.cameras[k], f.image(k), p);
+          const std::optional<Mask> m = custom(k, f.cameras[k], f.image(k), p, f.subset);
           sink(k, m ? &*m : nullptr);
         }
       });
@@ -135,6 +136,18 @@ public:
       result_ = vcar::segment(scene_, views, prompt, renderer, segmenter, VcarParams::robust(), progress);
     }
     return *result_;
+  }
+
+  // The scene seen from `cam` (vcar's CPU renderer, the images the segmenter sees).
+  RenderOutput render(const Camera& cam) const {
+    require_scene();
+    cam.validate();
+    cpu::TiledRenderer r;
+    RenderRequest q;
+    q.scene = &scene_;
+    q.camera = &cam;
+    q.want_depth = true;
+    return r.render(q);
   }
 
   const SegmentationResult& result() const {

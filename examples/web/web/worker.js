@@ -35,8 +35,9 @@ async function maybeGunzip(bytes) {
 // Hook for a segmenter written in JavaScript (docs/web.md, "Bring your own SAM"): a script
 // imported here (options.segmenterScript, same origin) that defines
 //   self.vcarSegmenter = (frame) => Uint8Array (w*h, nonzero = object) | null
-// frame = {index, camera, width, height, rgb: Uint8Array (w*h*3), click: [u, v]}; frame 0 is the
-// reference view the click is on. It runs synchronously inside vcar::segment.
+// frame = {index, camera, width, height, rgb: Uint8Array (w*h*3), click: [u, v], fine}; frame 0
+// is the reference view the click is on; fine: the fine round (renders of the coarse selection).
+// It runs synchronously inside vcar::segment.
 function hostSegmenter(options) {
   if (!options || !options.segmenterScript) return undefined;
   importScripts(options.segmenterScript);

@@ -1,0 +1,65 @@
+// The JavaScript API of vcar.js under Node (the page's worker uses the same calls), on a real
+// trained scene (tests/data/train-1000.ply): loading, errors as messages, the JavaScript
+// segmenter hook (called per frame, reference first, masks checked for size), indices, scores,
+// log-scales and the PLY bytes. Exits non-zero on the first failed check.
+//   node test/node_api_test.cjs dist/vcar.js ../../tests/data/train-1000.ply
+const fs = require('fs');
+const path = require('path');
+const [vcarJs, scenePath] = process.argv.slice(2);
+const createVcar = require(path.resolve(vcarJs));
+let failed = 0;
+const check = (ok, what) => { if (!ok) { failed++; console.error('FAIL: ' + what); } };
+const vertexCount = (b) => Number(/element vertex (\d+)/.exec(Buffer.from(b.subarray(0, 2000)).toString('latin1'))[1]);
+
+(async () => {
+  const vcar = await createVcar();
+  const msg = (f) => { try { f(); return null; } catch (e) { return typeof e === 'number' ? vcar.exceptionMessage(e) : String(e); } };
+  const s = new vcar.Session();
+  check(/no scene loaded/.test(msg(() => s.defaultView(64, 48))), 'defaultView before a scene names the problem');
+  check(/unrecognised scene file/.test(msg(() => s.loadScene(new Uint8Array([1, 2, 3, 4, 5]), 'x.bin'))), 'garbage is rejected by content');
+  const n = s.loadScene(fs.readFileSync(scenePath), 'train-1000.ply');
+  check(n === 1000 && s.size() === 1000 && s.format() === 'PLY', `loaded ${n} Gaussians as ${s.format()}`);
+  const cam = s.defaultView(160, 120);
+  check(cam.width === 160 && cam.R.length === 9 && cam.t.length === 3, 'defaultView is a camera object');
+
+  // A JavaScript segmenter: the covered (non-black) pixels of each frame. Called once per frame
+  // of each round, reference (index 0) first, with w*h*3 RGB bytes.
+  const calls = [];
+  const covered = (f) => {
+    calls.push({ index: f.index, fine: f.fine, w: f.width, h: f.height, bytes: f.rgb.length });
+    const m = new Uint8Array(f.width * f.height);
+    let on = 0;
+    for (let i = 0; i < m.length; ++i) on += m[i] = (f.rgb[3 * i] | f.rgb[3 * i + 1] | f.rgb[3 * i + 2]) > 8 ? 1 : 0;
+    return on ? m : null;
+  };
+  // the click: the most opaque pixel of vcar's own render of the view
+  const img = s.render(cam);
+  check(img.rgb.length === 160 * 120 * 3 && img.alpha.length === 160 * 120, 'render gives w*h*3 RGB and w*h alpha');
+  let best = 0;
+  for (let i = 1; i < img.alpha.length; ++i) if (img.alpha[i] > img.alpha[best]) best = i;
+  const [u, v] = [best % 160 + 0.5, Math.floor(best / 160) + 0.5];
+  check(img.alpha[best] > 0.5, 'some pixel is covered');
+  const d = s.segment(cam, u, v, { segmenter: covered, orbitViews: 4 }, null);
+  check(calls.length >= 5 && calls[0].index === 0 && !calls[0].fine, `hook called per frame, reference first (${calls.length} calls)`);
+  check(calls.every((c) => c.bytes === c.w * c.h * 3), 'frames carry w*h*3 RGB bytes');
+  const idx = s.indices(), scores = s.scores(), ls = s.logScales();
+  check(idx.length === d.selected && idx.length > 0 && idx.length <= 1000, `selected ${idx.length}`);
+  check(scores.length === idx.length && ls.length === 3 * idx.length, 'scores and log-scales align with indices');
+  check(idx.every((v, i) => i === 0 || v > idx[i - 1]), 'indices ascending');
+  check(vertexCount(s.objectPly()) === idx.length, 'object PLY holds the selection');
+  check(vertexCount(s.removedPly()) === 1000 - idx.length, 'removed PLY holds the rest');
+  const st = s.statePly();
+  check(vertexCount(st) === 1000 && /property uchar state/.test(Buffer.from(st.subarray(0, 4000)).toString('latin1')), 'state PLY: every Gaussian + a state byte');
+
+  // A wrong-size mask is an error naming the hook.
+  const bad = msg(() => s.segment(cam, u, v, { segmenter: () => new Uint8Array(7), orbitViews: 2 }, null));
+  check(/options\.segmenter/.test(bad || ''), 'a wrong-size mask names options.segmenter: ' + bad);
+  // Progress: stages in order, and returning false cancels.
+  const stages = [];
+  s.segment(cam, u, v, { segmenter: covered, orbitViews: 2 }, (p) => { stages.push(p.stage); return true; });
+  check(stages[0] === 'coarse' && stages[stages.length - 1] === 'done', 'progress from coarse to done: ' + [...new Set(stages)].join(','));
+  const cancelled = msg(() => s.segment(cam, u, v, { segmenter: covered, orbitViews: 2 }, () => false));
+  check(/cancelled/.test(cancelled || ''), 'progress returning false cancels: ' + cancelled);
+  console.log(failed ? `node API test: ${failed} failed` : `node API test: PASS (${calls.length} frames through the JS hook, ${idx.length} selected)`);
+  process.exit(failed ? 1 : 0);
+})();
