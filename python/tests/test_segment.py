@@ -358,10 +358,10 @@ CTRL_C_CHILD = textwrap.dedent("""
     world = vcar.synth.generate_world(seed=5, n_gaussians=20000)
     rig = vcar.synth.make_rig("orbit", world, width=320, height=240, n_train=40)
     stages = []
-    def progress(p):
-        if not stages:
-            print("ready", flush=True)
+    def progress(p):  # SIGINT may land anywhere, in here too: KeyboardInterrupt either way
         stages.append(p.stage)
+        if len(stages) == 1:
+            print("ready", flush=True)
     try:
         vcar.segment(world.scene, rig.train, None, vcar.synth.OracleSegmenter(world), progress=progress,
                      params={"preset": "nvos", "force_sss": True, "S1": 16, "S2": 16})
