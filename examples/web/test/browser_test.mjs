@@ -7,8 +7,10 @@
 //
 // Checks: the page writes {"selected", "seconds", "indices"} into #vcar-result; the selection is
 // not empty and not the whole scene; its Jaccard overlap with the native selection is at least
-// --min-iou; the PLY bytes the page offers have the right vertex counts (object = selected,
-// removed = n - selected, state PLY = n with exactly `selected` state bytes with bit 0 set).
+// --min-iou; a mouse click on the canvas at the same spot (the viewer's camera converted to a
+// vcar camera) selects an overlapping set (Jaccard >= --min-click-iou, 0.7: the reference view
+// then differs, see there); the PLY bytes the page offers have the right vertex counts (object =
+// selected, removed = n - selected, state PLY = n with exactly `selected` bytes with bit 0 set).
 // Prints one JSON line with the numbers (browser and native seconds of the same run).
 import http from 'node:http';
 import fs from 'node:fs';
@@ -25,6 +27,7 @@ const scene = path.resolve(need('scene'));
 const click = need('click');
 const native = path.resolve(need('native'));
 const minIou = Number(args['min-iou'] ?? 0.98);
+const minClickIou = Number(args['min-click-iou'] ?? 0.7);
 const timeoutMs = Number(args.timeout ?? 300) * 1000;
 const chromium = args.chromium ?? '/usr/bin/chromium';
 
@@ -77,7 +80,23 @@ try {
     await new Promise((r) => setTimeout(r, 3000));
     await page.screenshot({ path: path.join(shots, 'web_isolate.png') });
   }
-  // The PLY files the page offers for download.
+  // A click on the canvas at the same spot: the viewer's camera (three.js) becomes a vcar camera
+  // (an extra, 17th view of the canvas' size), so the selection is not identical to the
+  // unattended one, but a wrong axis or intrinsics conversion would land the click elsewhere.
+  const box = await page.$eval('#canvas', (c) => { const r = c.getBoundingClientRect(); return { x: r.left, y: r.top, w: r.width, h: r.height }; });
+  const ref = await page.evaluate(() => Array.from(window.vcarPage.selection()));
+  const [cu, cv] = click.split(',').map(Number);
+  const refCam = await page.evaluate((v) => window.vcarPage.call({ type: 'view', name: v }), args.view ?? '');
+  await page.evaluate(() => { document.getElementById('status').textContent = ''; });
+  await page.mouse.click(box.x + cu * box.w / refCam.camera.width, box.y + cv * box.h / refCam.camera.height);
+  await page.waitForFunction(() => /^selected|^error/.test(document.getElementById('status').textContent), { timeout: timeoutMs, polling: 500 });
+  const clicked = await page.evaluate(() => Array.from(window.vcarPage.selection() || []));
+  const refSet = new Set(ref);
+  let both = 0;
+  for (const i of clicked) both += refSet.has(i);
+  const clickIou = both / (clicked.length + ref.length - both || 1);
+
+  // The PLY files the page offers for download (of the canvas click's selection).
   const header = async (kind) => page.evaluate(async (k) => {
     const r = await window.vcarPage.call({ type: 'ply', kind: k });
     const b = new Uint8Array(r.bytes);
@@ -109,13 +128,15 @@ try {
     jaccard: Number(iou.toFixed(5)), browser_seconds: Number(result.seconds.toFixed(3)),
     native_seconds: Number(nat.seconds.toFixed(3)), ratio: Number((result.seconds / nat.seconds).toFixed(2)),
     simd: result.simd, ply: { object: obj.n, removed: rem.n, state_n: st.n, state_selected: st.state },
+    canvas_click: { selected: clicked.length, jaccard_vs_unattended: Number(clickIou.toFixed(4)) },
   });
   if (!(result.selected > 0 && result.selected < total)) fail(`selection of ${result.selected} of ${total} Gaussians`);
   if (result.indices.length !== result.selected) fail('indices and selected disagree');
   if (iou < minIou) fail(`Jaccard overlap with the native selection ${iou.toFixed(4)} < ${minIou}`);
-  if (obj.n !== result.selected) fail(`object.ply has ${obj.n} vertices, ${result.selected} selected`);
-  if (rem.n !== total - result.selected || st.n !== total) fail(`removed.ply ${rem.n} / state PLY ${st.n} vertices for ${total}`);
-  if (st.state !== result.selected) fail(`state PLY marks ${st.state} selected, ${result.selected} expected`);
+  if (clickIou < minClickIou) fail(`canvas click: Jaccard ${clickIou.toFixed(4)} with the unattended selection < ${minClickIou}`);
+  if (obj.n !== clicked.length) fail(`object.ply has ${obj.n} vertices, ${clicked.length} selected`);
+  if (rem.n !== total - clicked.length || st.n !== total) fail(`removed.ply ${rem.n} / state PLY ${st.n} vertices for ${total}`);
+  if (st.state !== clicked.length) fail(`state PLY marks ${st.state} selected, ${clicked.length} expected`);
 } catch (e) {
   fail(e.message);
 } finally {
