@@ -2,6 +2,8 @@
 // build, for the browser test (same selection?) and the browser-vs-native benchmark.
 //   vcar_web_native --scene FILE [--cameras FILE] [--view NAME] --click U,V [--max-side N]
 //                   [--orbit-views N] [--out result.json]
+//   vcar_web_native --convert IN OUT      (any scene format -> .ply / .splat / .spz by OUT's
+//                                          extension: inputs for the browser format tests)
 // Prints (and writes to --out) {"selected": n, "seconds": t, "indices": [...]}: the page's
 // #vcar-result format; seconds covers vcar::segment only, as in the page.
 #include <chrono>
@@ -25,6 +27,15 @@ std::vector<std::uint8_t> slurp(const std::string& p) {
 int main(int argc, char** argv) {
   std::string scene, cameras, view, click, out;
   vcar::web::SegmentOptions opt;
+  if (argc == 4 && std::string(argv[1]) == "--convert") {
+    try {
+      vcar::io::write_scene(argv[3], vcar::io::read_scene(argv[2]));
+    } catch (const std::exception& e) {
+      std::cerr << "vcar_web_native: " << e.what() << "\n";
+      return 1;
+    }
+    return 0;
+  }
   for (int k = 1; k < argc; ++k) {
     const std::string a = argv[k];
     auto next = [&]() -> std::string {

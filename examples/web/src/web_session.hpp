@@ -56,6 +56,7 @@ public:
         io::detail::load_u32(bytes.data() + 4) < 4) {
       const io::detail::SpzHeader h = io::detail::check_spz_header(bytes.data(), name);
       scene_ = io::detail::decode_spz_arrays(h, bytes.data() + 16, -1.f, 1.f, name);
+      format_ = io::SceneFormat::spz;
     } else {
       scene_ = io::read_scene(path, &format_);
     }

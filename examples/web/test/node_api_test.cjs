@@ -2,10 +2,12 @@
 // trained scene (tests/data/train-1000.ply): loading, errors as messages, the JavaScript
 // segmenter hook (called per frame, reference first, masks checked for size), indices, scores,
 // log-scales and the PLY bytes. Exits non-zero on the first failed check.
-//   node test/node_api_test.cjs dist/vcar.js ../../tests/data/train-1000.ply
+//   node test/node_api_test.cjs dist/vcar.js ../../tests/data/train-1000.ply [SCENE.splat SCENE.spz]
+// The optional files (the same scene converted by `vcar_web_native --convert`) check the other
+// formats: .splat as is, SPZ inflated first (zlib here, DecompressionStream in the page).
 const fs = require('fs');
 const path = require('path');
-const [vcarJs, scenePath] = process.argv.slice(2);
+const [vcarJs, scenePath, splatPath, spzPath] = process.argv.slice(2);
 const createVcar = require(path.resolve(vcarJs));
 let failed = 0;
 const check = (ok, what) => { if (!ok) { failed++; console.error('FAIL: ' + what); } };
@@ -19,6 +21,16 @@ const vertexCount = (b) => Number(/element vertex (\d+)/.exec(Buffer.from(b.suba
   check(/unrecognised scene file/.test(msg(() => s.loadScene(new Uint8Array([1, 2, 3, 4, 5]), 'x.bin'))), 'garbage is rejected by content');
   const n = s.loadScene(fs.readFileSync(scenePath), 'train-1000.ply');
   check(n === 1000 && s.size() === 1000 && s.format() === 'PLY', `loaded ${n} Gaussians as ${s.format()}`);
+  if (splatPath) {
+    const o = new vcar.Session();
+    check(o.loadScene(fs.readFileSync(splatPath), 'scene.splat') === 1000 && o.format() === '.splat', `.splat: ${o.format()}`);
+    const gz = fs.readFileSync(spzPath);
+    check(gz[0] === 0x1f && gz[1] === 0x8b, 'the SPZ file is gzip (v3)');
+    check(o.loadScene(require('zlib').gunzipSync(gz), 'scene.spz') === 1000 && o.format() === 'SPZ', `SPZ: ${o.format()}`);
+    const sameCam = o.defaultView(160, 120), plyCam = s.defaultView(160, 120);
+    check(Math.abs(sameCam.t[2] - plyCam.t[2]) < 1e-2 * Math.abs(plyCam.t[2]) + 1e-3, 'SPZ positions agree with the PLY (default view)');
+    o.delete();
+  }
   const cam = s.defaultView(160, 120);
   check(cam.width === 160 && cam.R.length === 9 && cam.t.length === 3, 'defaultView is a camera object');
 
