@@ -131,7 +131,7 @@ std::size_t vertex_count(const std::vector<std::uint8_t>& ply) {
 
 TEST_CASE("the browser session selects the clicked ball, with orbit views and with cameras.json", "[web]") {
   const int n = 300;
-  vcar::web::Session s(std::filesystem::temp_directory_path() / "vcar-web-test");
+  vcar::web::Session s;
   REQUIRE(s.load_scene(ply_bytes(two_balls(n)), "balls.ply") == 2 * n);
   vcar::web::SegmentOptions opt;
   opt.max_side = 96;
@@ -177,5 +177,18 @@ TEST_CASE("the browser session selects the clicked ball, with orbit views and wi
   }
   SECTION("a click on empty space is an error naming the prompt") {
     CHECK_THROWS_WITH(s.segment(ref, 2, 2, opt), Catch::Contains("prompt"));
+  }
+  SECTION("the scratch folder is the session's own and goes with it") {
+    std::filesystem::path pa, pb;
+    {
+      vcar::web::Session a, b;
+      pa = a.scratch();
+      pb = b.scratch();
+      CHECK(pa != pb);
+      CHECK(std::filesystem::is_directory(pa));
+      CHECK(std::filesystem::is_directory(pb));
+    }
+    CHECK_FALSE(std::filesystem::exists(pa));
+    CHECK_FALSE(std::filesystem::exists(pb));
   }
 }

@@ -170,7 +170,7 @@ private:
     o.set("timings", t);
     return o;
   }
-  vcar::web::Session s_{"/tmp/vcar-web"};
+  vcar::web::Session s_;  // its own scratch folder in the in-memory file system
 };
 
 std::string simd_path() {

@@ -8,6 +8,7 @@
 // Files are read and written through a scratch folder (emscripten's in-memory file system in the
 // browser), because vcar::io reads by path and decides the format by content.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -44,8 +45,22 @@ struct SegmentOptions {
 
 class Session {
 public:
-  explicit Session(std::filesystem::path scratch = std::filesystem::temp_directory_path() / "vcar-web")
-      : dir_(std::move(scratch)) { std::filesystem::create_directories(dir_); }
+  // `scratch`: a folder of its own (created, and removed with the session); by default a new
+  // one under the temporary directory, so that sessions of concurrent processes never meet.
+  explicit Session(std::filesystem::path scratch = {}) : dir_(std::move(scratch)) {
+    if (dir_.empty())
+      dir_ = std::filesystem::temp_directory_path() /
+             ("vcar-web-" + std::to_string(std::chrono::steady_clock::now().time_since_epoch().count()) + "-" +
+              std::to_string(reinterpret_cast<std::uintptr_t>(this)));
+    std::filesystem::create_directories(dir_);
+  }
+  ~Session() {
+    std::error_code ec;
+    std::filesystem::remove_all(dir_, ec);
+  }
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+  const std::filesystem::path& scratch() const { return dir_; }
 
   // Any format vcar::io::read_scene reads (by content; `name` matters only for .splat).
   // SPZ v2/v3 may also come already gunzipped (the browser inflates with DecompressionStream).
