@@ -175,6 +175,25 @@ TEST_CASE("the browser session selects the clicked ball, with orbit views and wi
     check_red(r);
     CHECK_THROWS_AS(vcar::web::reference_view(s, "nope"), vcar::Error);
   }
+  SECTION("transforms.json gives the same cameras") {
+    const auto dir = std::filesystem::temp_directory_path() / "vcar_web_test_transforms";
+    std::filesystem::create_directories(dir);
+    std::vector<vcar::Camera> cams;
+    for (int k = 0; k < 3; ++k)
+      cams.push_back(vcar::Camera::look_at(Eigen::Vector3f(3.f * k - 3.f, -1.f, -4.f), {0, 0, 0}, {0, -1, 0},
+                                           {160, 120, 150.f, 150.f, 80.f, 60.f}, "t" + std::to_string(k)));
+    vcar::io::write_transforms_json(dir / "transforms.json", cams);
+    std::ifstream in(dir / "transforms.json", std::ios::binary);
+    const std::vector<std::uint8_t> b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::filesystem::remove_all(dir);
+    REQUIRE(s.load_cameras(b, "transforms.json") == 3);
+    for (int k = 0; k < 3; ++k) {
+      CHECK(s.cameras()[k].width == 160);
+      CHECK(s.cameras()[k].fx == Approx(150.f));
+      CHECK((s.cameras()[k].position() - cams[k].position()).norm() < 1e-4f);
+      CHECK((s.cameras()[k].R_w - cams[k].R_w).norm() < 1e-4f);
+    }
+  }
   SECTION("a click on empty space is an error naming the prompt") {
     CHECK_THROWS_WITH(s.segment(ref, 2, 2, opt), Catch::Contains("prompt"));
   }
