@@ -8,6 +8,10 @@ synthetic scenes, whose target has its own colour; used by the protocol tests.
     colour_picker.py [--tol T] [--fail STATUS] [--sleep S] [--bad-size] [--garbage]
                      [--skip K] REQUEST_DIR
 
+Several objects (prompt.json "objects", `vcar segment --prompts`): each object's colour is
+picked on its own frame ("frame") at its first positive point, and its masks go to
+masks/<name>/NNNNN.png.
+
 Misbehaviours for tests: --fail exits with STATUS before writing anything, --sleep waits S
 seconds first, --bad-size writes frame 0's mask one pixel too wide, --garbage writes a mask file
 that is not a PNG, --skip K writes no mask for frame K.
@@ -112,35 +116,40 @@ def main(argv):
         prompt = json.load(f)
     with open(os.path.join(req, "cameras.json")) as f:
         cams = json.load(f)
-    pts = [p for p, l in zip(prompt["points"], prompt["point_labels"]) if l == 1]
-    if not pts:
-        print("colour_picker: needs a positive point", file=sys.stderr)
-        return 2
-    os.makedirs(os.path.join(req, "masks"), exist_ok=True)
-    target = None
-    for k, cam in enumerate(cams):
-        stem = cam["img_name"]
-        w, h, c, rows = read_png(os.path.join(req, "frames", stem + ".png"))
-        if target is None:  # frame 0 is the reference view of the prompt
-            u, v = int(pts[0][0]), int(pts[0][1])
-            target = rows[v][u * c:u * c + 3]
-        out = os.path.join(req, "masks", stem + ".png")
-        if k == skip:
-            continue
-        if garbage and k == 0:
-            with open(out, "wb") as f:
-                f.write(b"this is not a png")
-            continue
-        mask = []
-        for r in rows:
-            mask.append(bytearray(
-                255 if max(abs(r[x * c + i] - target[i]) for i in range(3)) <= tol else 0
-                for x in range(w)))
-        if bad_size and k == 0:
-            mask = [m + b"\x00" for m in mask]
-            w += 1
-        write_png_grey(out, w, h, mask)
-    print("colour_picker: %d frames, colour %s" % (len(cams), list(target)))
+    objects = prompt.get("objects")
+    if objects is None:  # one object: its prompt is on frame 0, masks in masks/
+        objects = [dict(prompt, name="", frame=0)]
+    frames = [read_png(os.path.join(req, "frames", cam["img_name"] + ".png")) for cam in cams]
+    for obj in objects:
+        pts = [p for p, l in zip(obj["points"], obj["point_labels"]) if l == 1]
+        if not pts:
+            print("colour_picker: needs a positive point (object %r)" % obj["name"], file=sys.stderr)
+            return 2
+        w, h, c, rows = frames[obj["frame"]]
+        u, v = int(pts[0][0]), int(pts[0][1])
+        target = rows[v][u * c:u * c + 3]
+        out_dir = os.path.join(req, "masks", obj["name"]) if obj["name"] else os.path.join(req, "masks")
+        os.makedirs(out_dir, exist_ok=True)
+        for k, cam in enumerate(cams):
+            stem = cam["img_name"]
+            w, h, c, rows = frames[k]
+            out = os.path.join(out_dir, stem + ".png")
+            if k == skip:
+                continue
+            if garbage and k == 0:
+                with open(out, "wb") as f:
+                    f.write(b"this is not a png")
+                continue
+            mask = []
+            for r in rows:
+                mask.append(bytearray(
+                    255 if max(abs(r[x * c + i] - target[i]) for i in range(3)) <= tol else 0
+                    for x in range(w)))
+            if bad_size and k == 0:
+                mask = [m + b"\x00" for m in mask]
+                w += 1
+            write_png_grey(out, w, h, mask)
+    print("colour_picker: %d frames, %d objects, last colour %s" % (len(cams), len(objects), list(target)))
     return 0
 
 

@@ -227,15 +227,10 @@ void apply_identity(Selection& s, const GaussianScene& scene, const std::string&
 
 }  // namespace
 
-Selection read_selection(const std::filesystem::path& file, const GaussianScene* scene) {
-  const std::string where = file.string();
+namespace {
+// One selection object (the top level of selection.json, or an entry of its "objects").
+Selection parse_selection(const nlohmann::json& j, const std::string& where) {
   Selection s;
-  if (starts_with_ply(file)) {
-    s = selection_from_state_ply(file);
-    if (scene) apply_identity(s, *scene, where);
-    return s;
-  }
-  const nlohmann::json j = read_json(file);
   try {
     if (!j.is_object() || !j.contains("indices") || !j["indices"].is_array())
       throw CliError(exit_bad_input, "expected an object with an \"indices\" array", where);
@@ -264,9 +259,13 @@ Selection read_selection(const std::filesystem::path& file, const GaussianScene*
   for (std::size_t k = 1; k < s.indices.size(); ++k)
     if (s.indices[k] <= s.indices[k - 1])
       throw CliError(exit_bad_input, "\"indices\" must be strictly ascending (entry " + std::to_string(k) + ")", where);
+  return s;
+}
+
+void apply_to_scene(Selection& s, const GaussianScene* scene, const std::string& where) {
   if (scene && s.identity) {
     apply_identity(s, *scene, where);
-    return s;
+    return;
   }
   const std::size_t scene_size = scene ? scene->size() : 0;
   if (scene_size > 0) {
@@ -277,6 +276,73 @@ Selection read_selection(const std::filesystem::path& file, const GaussianScene*
       throw CliError(exit_bad_input, "index " + std::to_string(s.indices.back()) + " out of range (" +
                                          std::to_string(scene_size) + " Gaussians)", where);
   }
+}
+}  // namespace
+
+std::vector<ObjectSelection> read_object_selections(const std::filesystem::path& file, const GaussianScene* scene) {
+  const std::string where = file.string();
+  std::vector<ObjectSelection> out;
+  if (starts_with_ply(file)) {
+    out.push_back({"", -1, read_selection(file, scene)});
+    return out;
+  }
+  const nlohmann::json j = read_json(file);
+  if (!j.is_object() || !j.contains("objects")) {
+    out.push_back({"", -1, read_selection(file, scene)});
+    return out;
+  }
+  if (!j["objects"].is_array() || j["objects"].empty())
+    throw CliError(exit_bad_input, "\"objects\" must be a non-empty array", where);
+  for (std::size_t k = 0; k < j["objects"].size(); ++k) {
+    const auto& e = j["objects"][k];
+    const std::string w = where + ", object " + std::to_string(k);
+    ObjectSelection o;
+    try {
+      o.name = e.at("name").get<std::string>();
+      if (e.contains("object_id") && e["object_id"].is_number_integer()) o.object_id = e["object_id"].get<int>();
+    } catch (const nlohmann::json::exception& x) {
+      throw CliError(exit_bad_input, std::string("malformed object: ") + x.what(), w);
+    }
+    o.selection = parse_selection(e, w + " ('" + o.name + "')");
+    apply_to_scene(o.selection, scene, w + " ('" + o.name + "')");
+    out.push_back(std::move(o));
+  }
+  return out;
+}
+
+Selection read_selection(const std::filesystem::path& file, const GaussianScene* scene) {
+  const std::string where = file.string();
+  Selection s;
+  if (starts_with_ply(file)) {
+    s = selection_from_state_ply(file);
+    if (scene) apply_identity(s, *scene, where);
+    return s;
+  }
+  const nlohmann::json j = read_json(file);
+  if (j.is_object() && j.contains("objects")) {
+    // Several objects (vcar segment --prompts): their union, each with its refined scales.
+    std::vector<ObjectSelection> objs = read_object_selections(file, scene);
+    std::vector<std::pair<Index, std::pair<std::size_t, std::size_t>>> all;  // index -> (object, entry)
+    bool scaled = true;
+    for (std::size_t o = 0; o < objs.size(); ++o) {
+      scaled = scaled && objs[o].selection.has_log_scales();
+      for (std::size_t k = 0; k < objs[o].selection.indices.size(); ++k) all.push_back({objs[o].selection.indices[k], {o, k}});
+    }
+    std::sort(all.begin(), all.end());
+    for (std::size_t k = 0; k < all.size(); ++k) {
+      if (k > 0 && all[k].first == all[k - 1].first) continue;  // conflicts are resolved when written; keep the first
+      const Selection& src = objs[all[k].second.first].selection;
+      const std::size_t e = all[k].second.second;
+      s.indices.push_back(all[k].first);
+      s.scores.push_back(e < src.scores.size() ? src.scores[e] : 0.f);
+      if (scaled)
+        for (int d = 0; d < 3; ++d) s.log_scale[d].push_back(src.log_scale[d][e]);
+    }
+    s.scene_gaussians = scene ? scene->size() : objs.front().selection.scene_gaussians;
+    return s;
+  }
+  s = parse_selection(j, where);
+  apply_to_scene(s, scene, where);
   return s;
 }
 

@@ -117,7 +117,18 @@ nlohmann::json selection_json(const Selection& s);
 // to that scene: by identity, so a re-sorted copy of the selection's scene gets the same
 // Gaussians (indices, scores and scales re-ordered to match) and any other scene is refused
 // (exit 2, saying why); a file without identity is applied by index after a size check.
+// A selection.json of several objects (`segment --prompts`: "objects": [{"name", "object_id",
+// "indices", ...}]) reads as the union of its objects.
 Selection read_selection(const std::filesystem::path& file, const GaussianScene* scene = nullptr);
+
+// Each object of a selection.json of several objects, applied to `scene` like read_selection; a
+// one-object file (or state PLY) gives one entry named "".
+struct ObjectSelection {
+  std::string name;
+  int object_id = -1;  // the synthetic world's object, when the prompts named it
+  Selection selection;
+};
+std::vector<ObjectSelection> read_object_selections(const std::filesystem::path& file, const GaussianScene* scene = nullptr);
 
 // ---- parsing -------------------------------------------------------------------------------
 // "u,v;u,v,0": points, label 1 unless a third value says 0 (negative). Errors name `where`.

@@ -22,8 +22,10 @@ struct SegmentOptions {
   bool segmenter_output = false;  // show the segmenter's stdout/stderr instead of logging it
   std::string state_ply;          // also write the whole scene with SuperSplat's state flags
   bool opengl_cameras = false;    // the camera file's axes are OpenGL's (x right, y up, z back)
+  std::string prompts;            // several objects: a JSON list of prompts (cmd_segment_objects.cpp)
 };
 int run_segment(const SegmentOptions& o, const GlobalOptions& g);
+int run_segment_objects(const SegmentOptions& o, const GlobalOptions& g);
 
 struct RenderOptions {
   std::string scene, cameras, view, out, alpha, selection, background = "0,0,0";

@@ -70,8 +70,12 @@ std::string usage_message(const CLI::App& app, const CLI::ParseError& e, int arg
     }
     std::string missing;
     std::size_t n = 0;
-    for (const CLI::Option* opt : sub->get_options())
-      if (opt->get_required() && opt->count() == 0) { missing += (n++ ? ", " : "") + opt->get_name(); }
+    for (const CLI::Option* opt : sub->get_options()) {
+      // segment: --prompt-view is required unless --prompts gives every object's prompt.
+      const bool required = opt->get_required() ||
+                            (sub->get_name() == "segment" && opt->get_name() == "--prompt-view" && sub->count("--prompts") == 0);
+      if (required && opt->count() == 0) { missing += (n++ ? ", " : "") + opt->get_name(); }
+    }
     if (sub->get_name() == "segment" && sub->count("--masks") + sub->count("--segmenter-cmd") + sub->count("--oracle") == 0)
       missing += (n++ ? ", " : "") + std::string("one of --masks, --segmenter-cmd or --oracle");
     if (n > 0) return sub->get_name() + ": missing " + missing;
@@ -121,7 +125,10 @@ int main(int argc, char** argv) {
   c_seg->add_option("--scene", seg.scene, "3DGS scene: PLY, compressed PLY, SPZ or .splat")->required();
   c_seg->add_option("--cameras", seg.cameras, "COLMAP sparse dir, cameras.json or transforms.json")->required();
   c_seg->add_option("--images", seg.images, "Training images (default: rendered with the CPU backend)");
-  c_seg->add_option("--prompt-view", seg.prompt_view, "Name of the reference view the prompt is given on")->required();
+  auto* o_prompt_view = c_seg->add_option("--prompt-view", seg.prompt_view, "Name of the reference view the prompt is given on");
+  auto* o_prompts = c_seg->add_option("--prompts", seg.prompts,
+                                      "Several objects: JSON list of {name, reference_view, points/box/text or object_id}");
+  o_prompts->excludes(o_prompt_view);
   auto* o_masks = c_seg->add_option("--masks", seg.masks, "Folder of masks named like the views");
   auto* o_cmd = c_seg->add_option("--segmenter-cmd", seg.segmenter_cmd, "External segmenter command (protocol: docs/cli.md)");
   auto* o_oracle = c_seg->add_option("--oracle", seg.oracle, "Synthetic dataset dir: ground-truth masks rendered per frame");
@@ -184,8 +191,11 @@ int main(int argc, char** argv) {
     if (*c_demo) return run_demo(demo, g);
     if (*c_synth) return run_synth(synth, g);
     if (*c_seg) {
+      std::string missing;
+      if (seg.prompt_view.empty() && seg.prompts.empty()) missing = "--prompt-view (or --prompts)";
       if (seg.masks.empty() && seg.segmenter_cmd.empty() && seg.oracle.empty())
-        throw CliError(exit_usage, "one of --masks, --segmenter-cmd or --oracle is required", "segment");
+        missing += (missing.empty() ? "" : ", ") + std::string("one of --masks, --segmenter-cmd or --oracle");
+      if (!missing.empty()) throw CliError(exit_usage, "missing " + missing, "segment");
       return run_segment(seg, g);
     }
     if (*c_eval) return run_eval(ev, g);

@@ -7,6 +7,11 @@ usage: make_bad_inputs.py DATASET OUT
   OUT/cameras_dup.json cameras.json with view 1 renamed like view 0
   OUT/cameras_opengl.json  cameras.json with OpenGL camera axes (x right, y up, z backward):
                        the columns y and z of each camera-to-world rotation negated
+and, for several objects per run (`vcar segment --prompts`):
+  OUT/prompts_oracle.json  the target and its neighbour by object_id (gt/scene.json)
+  OUT/prompts_twice.json   the target twice (prompt.json's points), as "target" and "again":
+                       every Gaussian is claimed by both, a tie the first object wins
+  OUT/masks_objects/target/, OUT/masks_objects/again/   the dataset's masks for each
 """
 import json
 import os
@@ -38,6 +43,22 @@ def main(argv):
         cam["rotation"] = [[r[0], -r[1], -r[2]] for r in cam["rotation"]]
     with open(os.path.join(out, "cameras_opengl.json"), "w") as f:
         json.dump(gl, f)
+
+    with open(os.path.join(ds, "prompt.json")) as f:
+        prompt = json.load(f)
+    with open(os.path.join(ds, "gt", "scene.json")) as f:
+        world = json.load(f)
+    ref = prompt["reference_view"]
+    with open(os.path.join(out, "prompts_oracle.json"), "w") as f:
+        json.dump([{"name": "target", "reference_view": ref, "object_id": world["target_id"]},
+                   {"name": "neighbour", "reference_view": ref, "object_id": world["neighbour_id"]}], f)
+    twice = [{"name": n, "reference_view": ref, "points": prompt["points"][:1]} for n in ("target", "again")]
+    with open(os.path.join(out, "prompts_twice.json"), "w") as f:
+        json.dump(twice, f)
+    for name in ("target", "again"):
+        d = os.path.join(out, "masks_objects", name)
+        shutil.rmtree(d, ignore_errors=True)
+        shutil.copytree(os.path.join(ds, "masks"), d)
     return 0
 
 

@@ -193,6 +193,62 @@ vcar_cli_test(NAME render
   FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_selection"
   CHECKS "-DFILES=${_cli_work}/render.png|${_cli_work}/render_alpha.png")
 
+# ---- several objects in one run (--prompts) -------------------------------------------------
+set(_check_objects "${CMAKE_CURRENT_SOURCE_DIR}/check_objects.py")
+# The oracle's target and neighbour: one coarse round; each object its own result; the target's
+# Gaussians are the single run's less those the neighbour won (check_objects.py).
+vcar_cli_test(NAME segment_objects_oracle
+  ARGS "${_seg_common}|--prompts|${_bad}/prompts_oracle.json|--oracle|${_cli_ds}|--out|${_cli_work}/seg_objects" RC 0
+  FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_bad_inputs" FIXTURES_SETUP vcar_cli_objects
+  CHECKS "-DCLEAN=${_cli_work}/seg_objects"
+         "-DFILES=${_cli_work}/seg_objects/objects/target.ply|${_cli_work}/seg_objects/objects/neighbour.ply|${_cli_work}/seg_objects/labels.ply|${_cli_work}/seg_objects/object.ply|${_cli_work}/seg_objects/removed.ply"
+         "-DJSON_KEYS=${_cli_work}/seg_objects/selection.json:objects,scene|${_cli_work}/seg_objects/report.json:objects,conflicts,timings_s,peak_rss_mib"
+         "-DPOSITIVE=${_cli_work}/seg_objects/report.json:objects.0.counts.final|${_cli_work}/seg_objects/report.json:objects.1.counts.final"
+         "-DSTDOUT_HAS=2 objects in one run|conflicts ")
+add_test(NAME cli/segment_objects_match_single_run
+  COMMAND /usr/bin/python3 ${_check_objects} ${_cli_work}/seg_objects ${_cli_work}/seg_oracle/selection.json target)
+set_tests_properties(cli/segment_objects_match_single_run PROPERTIES
+  FIXTURES_REQUIRED "vcar_cli_objects;vcar_cli_oracle_single")
+set_tests_properties(cli/segment_oracle PROPERTIES FIXTURES_SETUP vcar_cli_oracle_single)
+# eval scores each object against its own ground truth.
+vcar_cli_test(NAME eval_objects
+  ARGS "eval|--dataset|${_cli_ds}|--selection|${_cli_work}/seg_objects/selection.json|--json" RC 0
+  FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_objects"
+  CHECKS "-DEQUALS=-:objects.0.name:target|-:objects.1.name:neighbour"
+         "-DAT_LEAST=-:objects.0.recall_3d:0.5|-:objects.1.recall_3d:0.5|-:objects.0.mIoU:0.5|-:objects.1.mIoU:0.5")
+vcar_cli_test(NAME render_objects_selection
+  ARGS "render|--scene|${_cli_ds}/scene.ply|--cameras|${_cli_ds}/cameras.json|--view|train_000|--selection|${_cli_work}/seg_objects/selection.json|--out|${_cli_work}/objects.png" RC 0
+  FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_objects" CHECKS "-DFILES=${_cli_work}/objects.png")
+# The same object twice from mask folders (masks/<object>/): every Gaussian claimed by both, the
+# tie goes to the first; the first equals the single run on the same masks.
+vcar_cli_test(NAME segment_objects_masks_conflict
+  ARGS "${_seg_common}|--prompts|${_bad}/prompts_twice.json|--masks|${_bad}/masks_objects|--out|${_cli_work}/seg_twice" RC 0
+  FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_bad_inputs" FIXTURES_SETUP vcar_cli_twice
+  CHECKS "-DCLEAN=${_cli_work}/seg_twice"
+         "-DEQUALS=${_cli_work}/seg_twice/report.json:objects.1.counts.final:0"
+         "-DPOSITIVE=${_cli_work}/seg_twice/report.json:conflicts|${_cli_work}/seg_twice/report.json:objects.0.counts.final")
+add_test(NAME cli/segment_objects_twice_match_single_run
+  COMMAND /usr/bin/python3 ${_check_objects} ${_cli_work}/seg_twice ${_cli_work}/seg_masks/selection.json target)
+set_tests_properties(cli/segment_objects_twice_match_single_run PROPERTIES FIXTURES_REQUIRED "vcar_cli_twice;vcar_cli_selection")
+# The external segmenter gets every object in one request (prompt.json "objects", masks/<name>/).
+vcar_cli_test(NAME segment_objects_segmenter_cmd
+  ARGS "${_seg_common}|--prompts|${_bad}/prompts_twice.json|--segmenter-cmd|${_picker}|--set|enable_sss=false|--out|${_cli_work}/seg_objects_cmd" RC 0
+  FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_bad_inputs"
+  CHECKS "-DCLEAN=${_cli_work}/seg_objects_cmd"
+         "-DEQUALS=${_cli_work}/seg_objects_cmd/report.json:objects.0.masks_missing:0|${_cli_work}/seg_objects_cmd/report.json:objects.1.masks_missing:0"
+         "-DPOSITIVE=${_cli_work}/seg_objects_cmd/report.json:objects.0.counts.final|${_cli_work}/seg_objects_cmd/report.json:conflicts")
+vcar_cli_test(NAME segment_objects_masks_folder_missing
+  ARGS "${_seg_common}|--prompts|${_bad}/prompts_oracle.json|--masks|${_bad}/masks_objects|--out|${_cli_work}/seg_objects_nofolder" RC 2
+  FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_bad_inputs"
+  CHECKS "-DSTDERR_HAS=no mask folder for object 'neighbour'|masks_objects/neighbour/<view>.png" "-DABSENT=${_cli_work}/seg_objects_nofolder")
+vcar_cli_test(NAME segment_objects_oracle_needs_id
+  ARGS "${_seg_common}|--prompts|${_bad}/prompts_twice.json|--oracle|${_cli_ds}|--out|${_cli_work}/seg_objects_noid" RC 2
+  FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_bad_inputs"
+  CHECKS "-DSTDERR_HAS=object 'target' has no \"object_id\"")
+vcar_cli_test(NAME usage_prompts_and_prompt_view
+  ARGS "${_seg_common}|--prompts|p.json|--prompt-view|train_000|--oracle|d|--out|o" RC 1
+  CHECKS "-DSTDERR_HAS=vcar: error: |--prompts")
+
 # Render formats and folders: JPEG by extension, unknown extensions and missing folders refused,
 # every view or a list of views into a folder.
 vcar_cli_test(NAME render_jpeg

@@ -13,6 +13,7 @@
 #include "vcar/io/splat_file.hpp"
 #include "vcar/io/scene_file.hpp"
 #include "vcar/io/state_ply.hpp"
+#include "vcar/io/label_ply.hpp"
 #include "vcar/io/selection_identity.hpp"
 #include "vcar/io/colmap.hpp"
 #include "vcar/io/cameras_json.hpp"

@@ -220,3 +220,53 @@ TEST_CASE("ExternalSegmenter reports progress: frames rendered, then masks writt
   CHECK(running >= 2);  // about every 0.25 s while the program sleeps 0.6 s
   CHECK(seen[rendered.size()].done == 0);  // the first report of the running phase: no mask yet
 }
+
+TEST_CASE("ExternalSegmenter::segment_objects: every object in one request, masks/<name>/") {
+  Fixture fx;
+  auto o = fx.options();
+  o.keep_requests = true;
+  ExternalSegmenter s("/usr/bin/python3 " + picker, o);
+  vcar::Prompt red = fx.prompt, blue = fx.prompt;
+  blue.points = {{30.5f, 5.5f}};  // frame 2 is blue at x = 30
+  blue.reference_view = 2;
+  std::vector<std::vector<std::optional<vcar::Mask>>> got(2, std::vector<std::optional<vcar::Mask>>(3));
+  std::vector<std::pair<std::size_t, std::size_t>> order;
+  s.segment_objects(fx.frames(), {{"red", red}, {"blue", blue}}, [&](std::size_t k, std::size_t q, const vcar::Mask* m) {
+    order.emplace_back(k, q);
+    if (m) got[q][k] = *m;
+  });
+  CHECK(order == std::vector<std::pair<std::size_t, std::size_t>>{{0, 0}, {0, 1}, {1, 0}, {1, 1}, {2, 0}, {2, 1}});
+  for (std::size_t k = 0; k < 3; ++k) {
+    REQUIRE(got[0][k]);
+    REQUIRE(got[1][k]);
+    std::size_t wrong = 0;
+    for (int y = 0; y < 24; ++y)
+      for (int x = 0; x < 32; ++x) {
+        const bool is_red = x < 10 + 2 * static_cast<int>(k);
+        wrong += ((*got[0][k])(x, y) != 0) != is_red;
+        wrong += ((*got[1][k])(x, y) != 0) == is_red;
+      }
+    CHECK(wrong == 0);
+  }
+  const fs::path req = s.last_request_dir();
+  CHECK(fs::exists(req / "masks" / "red" / "00000.png"));
+  CHECK(fs::exists(req / "masks" / "blue" / "00002.png"));
+  std::ifstream pj(req / "prompt.json");
+  const auto p = nlohmann::json::parse(pj);
+  REQUIRE(p["objects"].size() == 2);
+  CHECK(p["objects"][1]["name"] == "blue");
+  CHECK(p["objects"][1]["frame"] == 2);
+  CHECK(p["objects"][1]["points"][0][0].get<float>() == Approx(30.5f));
+  CHECK(p["points"][0][0].get<float>() == Approx(3.5f));  // the top level: the first object's prompt
+
+  auto bad = [&](const std::string& name) {
+    try {
+      s.segment_objects(fx.frames(), {{name, red}}, [](std::size_t, std::size_t, const vcar::Mask*) {});
+    } catch (const vcar::Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  CHECK_THAT(bad("../x"), Catch::Contains("not a folder name"));
+  CHECK_THAT(bad(""), Catch::Contains("not a folder name"));
+}

@@ -148,3 +148,16 @@ TEST_CASE("mode: sss_ frames get the silhouette (occluder not drawn), others the
   p.p_drop = 2.0;
   CHECK_THROWS_AS(OracleSegmenter(w, p), vcar::Error);
 }
+
+TEST_CASE("target_id picks another object than the world's target (several objects per run)") {
+  const World w = two_objects();
+  OracleParams p;
+  p.target_id = 2;
+  const auto cam = front();
+  const auto nb = OracleSegmenter(w, p).mask(cam, 0);
+  REQUIRE(nb);
+  CHECK(nb->data == visible_mask(w, cam, 2).data);
+  CHECK(nb->data != visible_mask(w, cam, 1).data);
+  p.target_id = -1;  // default: the world's target
+  CHECK(OracleSegmenter(w, p).mask(cam, 0)->data == visible_mask(w, cam, 1).data);
+}

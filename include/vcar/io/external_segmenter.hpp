@@ -136,6 +136,32 @@ public:
 
   // One segmentation round (see the protocol above).
   void segment(const FrameSequence& frames, const Prompt& prompt, const MaskSink& sink) {
+    run_round(frames, {{std::string(), prompt}}, false,
+              [&](std::size_t k, std::size_t, const Mask* m) { sink(k, m); });
+  }
+
+  // One round for several objects at once (`vcar segment --prompts`): prompt.json gets
+  // "objects": [{"name", "frame" (the frame its prompt is on), "points", "point_labels", "box",
+  // "text"}, ...] (the top-level prompt fields are the first object's), and the program writes
+  // masks/<name>/00000.png ...; `sink(frame, object, mask)` in frame order, objects inner.
+  // Object names must be usable as folder names ([A-Za-z0-9_.-], not "." or "..").
+  using ObjectMaskSink = std::function<void(std::size_t frame, std::size_t object, const Mask*)>;
+  void segment_objects(const FrameSequence& frames, const std::vector<std::pair<std::string, Prompt>>& objects,
+                       const ObjectMaskSink& sink) {
+    if (objects.empty()) throw Error("no object to segment", "segmenter");
+    for (const auto& [name, p] : objects) {
+      if (name.empty() || name == "." || name == ".." ||
+          name.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_.-") != std::string::npos)
+        throw Error("object name '" + name + "' is not a folder name ([A-Za-z0-9_.-])", "segmenter");
+      if (p.reference_view >= frames.size()) throw Error("object '" + name + "': prompt frame out of range", "segmenter");
+    }
+    run_round(frames, objects, true, sink);
+  }
+
+private:
+  void run_round(const FrameSequence& frames, const std::vector<std::pair<std::string, Prompt>>& objects, bool multi,
+                 const ObjectMaskSink& sink) {
+    const Prompt& prompt = objects.front().second;
     ++round_;
     failure_ = Failure::none;
     const std::string where_round = "segmenter round " + std::to_string(round_);
@@ -152,31 +178,38 @@ public:
       }
     } cleanup{dir, options_, ok};
 
-    write_request(dir, frames, prompt, where_round);
-    run_program(dir, where_round, frames.size());
-    // Read every mask before handing any to the sink, so a bad file fails the round cleanly.
+    write_request(dir, frames, prompt, where_round, multi ? &objects : nullptr);
+    run_program(dir, where_round, frames.size() * (multi ? objects.size() : 1));
+    // Each mask is decoded and checked before it goes to the sink, so a bad file fails the round
+    // with its name.
     const std::size_t n = frames.size();
     for (std::size_t k = 0; k < n; ++k) {
-      const std::filesystem::path file = dir / "masks" / (frame_stem(k) + ".png");
-      const std::string where = where_round + ", frame " + std::to_string(k) + " (view '" +
-                                frames.cameras[k].name + "', " + file.string() + ")";
-      std::error_code ec;
-      if (!std::filesystem::exists(file, ec)) {
-        sink(k, nullptr);  // no file: no mask for this frame
-        continue;
+      for (std::size_t o = 0; o < (multi ? objects.size() : 1); ++o) {
+        const std::filesystem::path file =
+            multi ? dir / "masks" / objects[o].first / (frame_stem(k) + ".png") : dir / "masks" / (frame_stem(k) + ".png");
+        const std::string where = where_round + ", frame " + std::to_string(k) + " (view '" +
+                                  frames.cameras[k].name + "'" + (multi ? ", object '" + objects[o].first + "'" : "") +
+                                  ", " + file.string() + ")";
+        std::error_code ec;
+        if (!std::filesystem::exists(file, ec)) {
+          sink(k, o, nullptr);  // no file: no mask for this frame
+          continue;
+        }
+        Mask m = read_mask_png(file, where);
+        const Camera& cam = frames.cameras[k];
+        if (m.width != cam.width || m.height != cam.height) {
+          failure_ = Failure::bad_mask;
+          throw Error("mask is " + std::to_string(m.width) + "x" + std::to_string(m.height) +
+                          ", the frame is " + std::to_string(cam.width) + "x" +
+                          std::to_string(cam.height) + "; request kept in " + dir.string(), where);
+        }
+        sink(k, o, &m);
       }
-      Mask m = read_mask_png(file, where);
-      const Camera& cam = frames.cameras[k];
-      if (m.width != cam.width || m.height != cam.height) {
-        failure_ = Failure::bad_mask;
-        throw Error("mask is " + std::to_string(m.width) + "x" + std::to_string(m.height) +
-                        ", the frame is " + std::to_string(cam.width) + "x" +
-                        std::to_string(cam.height) + "; request kept in " + dir.string(), where);
-      }
-      sink(k, &m);
     }
     ok = true;
   }
+
+public:
 
   std::size_t rounds() const noexcept { return round_; }
   Failure failure() const noexcept { return failure_; }
@@ -216,10 +249,21 @@ private:
     return templ;
   }
 
+  static nlohmann::json prompt_json(const Prompt& prompt) {
+    nlohmann::json pts = nlohmann::json::array();
+    for (const auto& p : prompt.points) pts.push_back({p.x(), p.y()});
+    nlohmann::json p = {{"points", pts}, {"point_labels", prompt.point_labels}, {"box", nullptr}, {"text", prompt.text}};
+    if (prompt.box) p["box"] = {(*prompt.box)[0], (*prompt.box)[1], (*prompt.box)[2], (*prompt.box)[3]};
+    return p;
+  }
+
   void write_request(const std::filesystem::path& dir, const FrameSequence& frames,
-                     const Prompt& prompt, const std::string& where) {
+                     const Prompt& prompt, const std::string& where,
+                     const std::vector<std::pair<std::string, Prompt>>* objects = nullptr) {
     std::filesystem::create_directories(dir / "frames");
     std::filesystem::create_directories(dir / "masks");
+    if (objects)
+      for (const auto& o : *objects) std::filesystem::create_directories(dir / "masks" / o.first);
     nlohmann::json cams = nlohmann::json::array();
     const auto t0 = std::chrono::steady_clock::now();
     for (std::size_t k = 0; k < frames.size(); ++k) {
@@ -237,12 +281,19 @@ private:
       }
       cams.push_back(camera_json(frames.cameras[k], k, stem));
     }
-    nlohmann::json pts = nlohmann::json::array();
-    for (const auto& p : prompt.points) pts.push_back({p.x(), p.y()});
-    nlohmann::json p = {{"points", pts}, {"point_labels", prompt.point_labels},
-                        {"box", nullptr}, {"text", prompt.text},
-                        {"round", round_}, {"frames", frames.size()}};
-    if (prompt.box) p["box"] = {(*prompt.box)[0], (*prompt.box)[1], (*prompt.box)[2], (*prompt.box)[3]};
+    nlohmann::json p = prompt_json(prompt);
+    p["round"] = round_;
+    p["frames"] = frames.size();
+    if (objects) {
+      nlohmann::json list = nlohmann::json::array();
+      for (const auto& [name, op] : *objects) {
+        nlohmann::json e = prompt_json(op);
+        e["name"] = name;
+        e["frame"] = op.reference_view;
+        list.push_back(std::move(e));
+      }
+      p["objects"] = std::move(list);
+    }
     write_text(dir / "cameras.json", cams.dump(1), where);
     write_text(dir / "prompt.json", p.dump(1), where);
   }
@@ -270,10 +321,15 @@ private:
 
   // Masks the program has finished so far: masks/NNNNN.png (a file being written under another
   // name, e.g. NNNNN.png.part.png, does not count).
-  static std::size_t masks_written(const std::filesystem::path& dir) {
+  static std::size_t masks_written(const std::filesystem::path& dir, int depth = 0) {
     std::size_t n = 0;
     std::error_code ec;
-    for (const auto& e : std::filesystem::directory_iterator(dir / "masks", ec)) {
+    const std::filesystem::path d = depth == 0 ? dir / "masks" : dir;
+    for (const auto& e : std::filesystem::directory_iterator(d, ec)) {
+      if (depth == 0 && e.is_directory(ec)) {
+        n += masks_written(e.path(), 1);  // masks/<object>/ of a multi-object request
+        continue;
+      }
       const std::string f = e.path().filename().string();
       n += f.size() == 9 && f.compare(5, 4, ".png") == 0 && f.find_first_not_of("0123456789") == 5;
     }

@@ -209,9 +209,11 @@ inline bool ply_is_standard_name(std::string_view s) {
 // Writes the Gaussians `indices` (all when null) with optional replacement log-scales and an
 // optional last `uchar state` property (SuperSplat's flags, io/state_ply.hpp; it replaces an
 // extra named "state").
+// With `label`, a last `int label` property (io/label_ply.hpp) follows.
 inline void write_ply_stream(std::ostream& out, const GaussianScene& scene,
                              const std::vector<Index>* indices, const LogScales* log_scale,
-                             bool binary, const std::vector<std::uint8_t>* state = nullptr) {
+                             bool binary, const std::vector<std::uint8_t>* state = nullptr,
+                             const std::vector<std::int32_t>* label = nullptr) {
   const std::size_t n = indices ? indices->size() : scene.size();
   const std::size_t B = static_cast<std::size_t>(scene.sh_coeffs()), E = scene.extra_names.size();
   // Column order: x y z, normals, f_dc, f_rest, opacity, scale, rot, other extras.
@@ -221,7 +223,8 @@ inline void write_ply_stream(std::ostream& out, const GaussianScene& scene,
       if (scene.extra_names[e] == nn) normals.push_back(e);
   if (normals.size() != 3) normals.clear();
   for (std::size_t e = 0; e < E; ++e)
-    if (std::find(normals.begin(), normals.end(), e) == normals.end() && !(state && scene.extra_names[e] == "state"))
+    if (std::find(normals.begin(), normals.end(), e) == normals.end() && !(state && scene.extra_names[e] == "state") &&
+        !(label && scene.extra_names[e] == "label"))
       others.push_back(e);
 
   std::vector<std::string> names = {"x", "y", "z"};
@@ -234,6 +237,7 @@ inline void write_ply_stream(std::ostream& out, const GaussianScene& scene,
       << "element vertex " << n << "\n";
   for (const auto& nm : names) out << "property float " << nm << "\n";
   if (state) out << "property uchar state\n";
+  if (label) out << "property int label\n";
   out << "end_header\n";
 
   const std::size_t P = names.size();
@@ -260,16 +264,27 @@ inline void write_ply_stream(std::ostream& out, const GaussianScene& scene,
       if constexpr (std::endian::native == std::endian::big)
         for (std::size_t q = 0; q < P; ++q) std::reverse(buf.data() + at + 4 * q, buf.data() + at + 4 * q + 4);
       if (state) buf.push_back(static_cast<char>((*state)[i]));
+      if (label) {
+        std::uint32_t u;
+        const std::int32_t v = (*label)[i];
+        std::memcpy(&u, &v, 4);
+        for (int b = 0; b < 4; ++b) buf.push_back(static_cast<char>((u >> (8 * b)) & 0xffu));  // little endian
+      }
     } else {
       char tmp[32];
       for (std::size_t q = 0; q < P; ++q) {
         // Shortest representation that reads back to the same float.
         const auto res = std::to_chars(tmp, tmp + sizeof tmp, row[q]);
         buf.insert(buf.end(), tmp, res.ptr);
-        buf.push_back(q + 1 < P || state ? ' ' : '\n');
+        buf.push_back(q + 1 < P || state || label ? ' ' : '\n');
       }
       if (state) {
         const std::string v = std::to_string(static_cast<int>((*state)[i]));
+        buf.insert(buf.end(), v.begin(), v.end());
+        buf.push_back(label ? ' ' : '\n');
+      }
+      if (label) {
+        const std::string v = std::to_string((*label)[i]);
         buf.insert(buf.end(), v.begin(), v.end());
         buf.push_back('\n');
       }

@@ -47,6 +47,7 @@ struct OracleParams {
   double p_drop = 0.0;          // probability of "no mask" for a frame
   double p_swap = 0.0;          // probability of the neighbour's mask instead of the target's
   int jitter_px = 0;            // random shift in [-jitter_px, jitter_px] per axis and frame
+  int target_id = -1;           // the object to answer with (-1: the world's target_id)
 
   void validate() const {
     if (!(p_drop >= 0.0 && p_drop <= 1.0)) throw Error("must be in [0, 1]", "OracleParams.p_drop");
@@ -79,7 +80,8 @@ public:
   std::optional<Mask> mask(const Camera& cam, std::size_t frame, bool subset = false) const {
     Rng rng(p_.seed, hash_combine(frame, hash_string(cam.name)), pose_hash(cam));
     if (rng.uniform_d() < p_.p_drop) return std::nullopt;
-    const int id = rng.uniform_d() < p_.p_swap ? world_->neighbour_id : world_->target_id;
+    const int target = p_.target_id >= 0 ? p_.target_id : world_->target_id;
+    const int id = rng.uniform_d() < p_.p_swap ? world_->neighbour_id : target;
     const bool sil = p_.mode == OracleMode::silhouette ||
                      (p_.mode == OracleMode::by_name &&
                       (subset || (!p_.silhouette_prefix.empty() && cam.name.rfind(p_.silhouette_prefix, 0) == 0)));
