@@ -153,7 +153,8 @@ private:
           throw Error("subset index " + std::to_string((*q.subset)[k]) + " out of range (scene has " +
                       std::to_string(n) + ")", "RenderRequest::subset");
     }
-    if (drawn >= (std::size_t{1} << 32)) throw Error("more than 2^32 drawn Gaussians", "RenderRequest");
+    // (in 64 bits: on 32-bit targets such as WebAssembly, size_t << 32 would be undefined)
+    if (static_cast<std::uint64_t>(drawn) >= (std::uint64_t{1} << 32)) throw Error("more than 2^32 drawn Gaussians", "RenderRequest");
     if (q.log_scale)
       for (int d = 0; d < 3; ++d)
         if ((*q.log_scale)[d].size() != drawn)
