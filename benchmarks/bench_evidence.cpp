@@ -471,8 +471,11 @@ std::vector<Experiment> plan(const Options& o) {
     for (int s = 1; s <= seeds; ++s)
       for (const auto& rig : rigs)
         for (const char* f : {"erode_diag", "dilate_diag"})
-          for (double L : q ? std::vector<double>{2} : std::vector<double>{1, 2})
-            out.push_back(make(s, rig, f, L, sweep_methods));
+          for (double L : q ? std::vector<double>{2} : std::vector<double>{1, 2}) {
+            std::vector<std::string> ms = sweep_methods;  // full mode: the robust ablation under failures too
+            if (!q) for (const auto& v : kRobustAblation) ms.push_back("vcar:" + v);
+            out.push_back(make(s, rig, f, L, ms));
+          }
   if (want("hires") && !q)
     for (int s = 1; s <= seeds; ++s)
       for (const auto& rig : rigs)
@@ -536,6 +539,7 @@ std::vector<Experiment> plan(const Options& o) {
                                                 : std::vector<std::string>{"naive", "sagd", "flashsplat", "vcar:full"};
       Experiment e = make(1, "forward", "size", static_cast<double>(n), ms);
       e.methods.push_back("vcar:coarse");
+      e.methods.push_back("vcar:robust");
       e.object_size = 25000;
       e.total = n;
       out.push_back(e);

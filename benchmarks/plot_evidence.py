@@ -175,10 +175,11 @@ def chart_size(rows):
     a0.set_title("total cost vs scene size"); a0.grid(alpha=0.3); a0.legend(fontsize=7)
     by = group([r for r in sz if r["key"] == "vcar:robust"] or [r for r in sz if r["key"] == "vcar:full"], ["gaussians"])
     xs = sorted(k[0] for k in by)
-    for col, lab in [("t_render", "render (all frames)"), ("t_vote", "voting"), ("t_vca", "VCA"),
+    for col, lab in [] if not xs else [("t_render", "render (all frames)"), ("t_vote", "voting"), ("t_vca", "VCA"),
                      ("t_sss", "SSS (fine round)"), ("t_abr", "ABR")]:
         a1.plot(xs, [max(median(r[col] for r in by[(x,)]), 1e-5) for x in xs], marker="o", ms=4, label=lab)
-    a1.set_xscale("log"); a1.set_yscale("log")
+    if xs:
+        a1.set_xscale("log"); a1.set_yscale("log")
     a1.set_xlabel("Gaussians in the scene (object fixed)"); a1.set_ylabel("seconds")
     a1.set_title("vcar robust stages" if any(r["key"] == "vcar:robust" for r in sz) else "VCAR stages"); a1.grid(alpha=0.3); a1.legend(fontsize=7)
     return save(fig, "scaling.svg")
@@ -221,6 +222,24 @@ def ablation_md(rows):
     table(["robust"] + ROBUST_ABLATION, ["robust"] + [label("vcar:" + v) for v in ROBUST_ABLATION],
           [("miou", "mIoU"), ("boundary_iou", "bIoU"), ("f1_3d", "3D F1")],
           "The robust preset, one mechanism changed at a time (docs/robust.md)")
+    # The same ablation under mask failures (the diag sweep; rigs where the ablation ran).
+    d = [r for r in rows if r["failure"].endswith("_diag") and r["method"] == "vcar"]
+    abl_rigs = sorted({r["rig"] for r in d if r["variant"].startswith("robust-")})
+    if abl_rigs:
+        d = [r for r in d if r["rig"] in abl_rigs]
+        cases = sorted({(r["failure"], r["level"]) for r in d})
+        gd = group(d, ["variant", "failure", "level"])
+        out.append("### The robust ablation under mask failures (mean over %s and seeds)" % " and ".join(abl_rigs))
+        out.append("")
+        out.append("| | " + " | ".join("%s %g%% mIoU / 3D F1" % c for c in cases) + " |")
+        out.append("|---" * (1 + len(cases)) + "|")
+        for v in ["full", "robust"] + ROBUST_ABLATION:
+            cells = []
+            for c in cases:
+                rs = gd.get((v,) + c, [])
+                cells.append("%s / %s" % (fmt(mean(r["miou"] for r in rs)), fmt(mean(r["f1_3d"] for r in rs))))
+            out.append("| %s | %s |" % ("paper (full)" if v == "full" else label("vcar:" + v), " | ".join(cells)))
+        out.append("")
     path = os.path.join(ROOT, "docs", "results", "ablation.md")
     with open(path, "w") as f:
         f.write("\n".join(out))
@@ -270,15 +289,18 @@ def summary_md(rows):
         for (key,), rs in sorted(group(sz, ["key"]).items()):
             by = group(rs, ["gaussians"])
             out.append("| %s | %s |" % (label(key), " | ".join(fmt(median(r["t_method"] for r in by.get((s,), []))) for s in sizes)))
-        out += ["", "VCAR full stages, median of repeated runs (s): render / vote / VCA / SSS / ABR; "
-                "n_coarse / mIoU / peak MiB", ""]
-        by = group([r for r in sz if r["key"] == "vcar:full"], ["gaussians"])
-        for s in sizes:
-            rs = by.get((s,), [])
-            out.append("- %d: %s" % (s, " / ".join(fmt(median(r[c] for r in rs), 4) for c in
-                       ["t_render", "t_vote", "t_vca", "t_sss", "t_abr"]) + "; %d / %s / %s (%d runs)" % (
-                       median(r["n_coarse"] for r in rs), fmt(mean(r["miou"] for r in rs)),
-                       fmt(median(r["peak_mib"] for r in rs), 0), len(rs))))
+        for key in ["vcar:full", "vcar:robust"]:
+            out += ["", "%s stages, median of repeated runs (s): render / vote / VCA / SSS / ABR; "
+                    "n_coarse / mIoU / peak MiB" % label(key), ""]
+            by = group([r for r in sz if r["key"] == key], ["gaussians"])
+            for s in sizes:
+                rs = by.get((s,), [])
+                if not rs:
+                    continue
+                out.append("- %d: %s" % (s, " / ".join(fmt(median(r[c] for r in rs), 4) for c in
+                           ["t_render", "t_vote", "t_vca", "t_sss", "t_abr"]) + "; %d / %s / %s (%d runs)" % (
+                           median(r["n_coarse"] for r in rs), fmt(mean(r["miou"] for r in rs)),
+                           fmt(median(r["peak_mib"] for r in rs), 0), len(rs))))
     out += beyond_md(all_rows)
     path = os.path.join(ROOT, "docs", "results", "summary.md")
     with open(path, "w") as f:
@@ -310,6 +332,18 @@ def beyond_md(rows):
                        case_key[-1], trio("vcar:robust"), trio("vcar:full"),
                        "%s %s" % (best[1], fmt(best[0])) if best else "-", fmt(ratio, 2)))
 
+    # Cost: robust against the paper's preset in the same experiment (same world, masks and process).
+    pair = group([r for r in rows if r["key"] in ("vcar:full", "vcar:robust")],
+                 ["seed", "rig", "failure", "level", "target", "width", "gaussians", "n_train"])
+    ratios = sorted(median(r["t_method"] for r in v if r["key"] == "vcar:robust") /
+                    median(r["t_method"] for r in v if r["key"] == "vcar:full")
+                    for v in pair.values() if {r["key"] for r in v} == {"vcar:full", "vcar:robust"})
+    if ratios:
+        q = lambda f: ratios[min(len(ratios) - 1, int(f * len(ratios)))]
+        out.extend(["", "## Cost of the robust preset", "",
+                    "t_method (no segmenter) of vcar robust / VCAR (paper) in the same experiment, %d experiments: "
+                    "median %s, quartiles %s-%s, 90th percentile %s." % (len(ratios), fmt(q(0.5), 2), fmt(q(0.25), 2),
+                                                                         fmt(q(0.75), 2), fmt(q(0.9), 2))])
     t = [r for r in rows if r["failure"] == "none" and r["target"] in TARGETS and r["width"] == 160]
     if t:
         block("Every target shape (160 x 120, failure-free; mean over seeds)", t, ["target"])
