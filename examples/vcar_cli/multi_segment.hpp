@@ -59,120 +59,6 @@ struct OneObject {
   }
 };
 
-// Stages 2 and 3 of vcar::segment for one object, from its coarse selection (the same code
-// path: algo/pipeline.hpp, "Stage 2" and "Stage 3").
-template <Renderer R>
-void finish_object(const GaussianScene& scene, const std::vector<Camera>& train_cameras, const Prompt& prompt,
-                   R& renderer, OneObject& segmenter, const VcarParams& params, const ProgressCallback& progress,
-                   vcar::detail::Clock::time_point t_start, std::vector<std::optional<RleMask>>& train_masks,
-                   std::vector<Index> selected, std::vector<float> scores, SegmentationResult& result) {
-  using vcar::detail::Clock;
-  using vcar::detail::seconds_since;
-  Diagnostics& diag = result.diagnostics;
-  auto stage = [&](std::string_view name) {
-    if (progress && !progress({name, 0, 0, seconds_since(t_start)})) throw Cancelled(std::string(name));
-  };
-  auto timing = [&](std::string name, double s) { diag.timings_s.emplace_back(std::move(name), s); };
-  const std::size_t M = train_cameras.size();
-  const std::size_t ref = prompt.reference_view;
-  const std::vector<std::size_t> order = vcar::detail::training_order(M, ref);
-  std::vector<Camera> frames;
-  for (std::size_t j : order) frames.push_back(train_cameras[j]);
-  auto keep_training_mask = [&](std::size_t j, const Mask* m) {
-    train_masks[j] = m && params.enable_abr ? std::optional<RleMask>(RleMask::encode(*m)) : std::nullopt;
-  };
-  auto usable = [&](const Mask* m) -> const Mask* {
-    if (!m || !(params.min_mask_fraction > 0.f)) return m;
-    std::size_t fg = 0;
-    for (std::uint8_t v : m->data) fg += v != 0;
-    return static_cast<double>(fg) > params.min_mask_fraction * static_cast<double>(m->pixels()) ? m : nullptr;
-  };
-  diag.n_coarse = diag.n_fine = diag.n_final = selected.size();
-  if (selected.empty()) {
-    diag.note = "the coarse stage selected no Gaussian (no training view shows the target, or every mask is empty)";
-    return;
-  }
-  AngularGap gap;
-  if (params.enable_sss) {
-    stage("view_completeness");
-    auto tv = Clock::now();
-    diag.sphere = robust_sphere(scene, selected, train_cameras[ref].position(), params.eta);
-    const auto valid = valid_cameras(scene, selected, train_cameras, params.rho_min);
-    diag.valid_cameras = valid.size();
-    std::vector<Eigen::Vector3f> positions;
-    for (std::size_t j : valid) positions.push_back(train_cameras[j].position());
-    gap = max_angular_gap(fibonacci_lattice(params.K), headings(diag.sphere.c, positions));
-    diag.max_gap_deg = gap.Delta_max_deg;
-    diag.gap_direction = gap.direction;
-    timing("vca", seconds_since(tv));
-  }
-  diag.sss_triggered = params.enable_sss && (params.force_sss || gap.Delta_max_deg > params.Delta_th_deg);
-  if (diag.sss_triggered || params.force_fine_round) {
-    stage("sss");
-    if (diag.sss_triggered) {
-      const Eigen::Vector3f up = estimate_scene_up(train_cameras);
-      const Intrinsics intr = sampled_view_intrinsics(train_cameras[ref], params.sampled_intrinsics, params.sampled_fov_deg);
-      diag.sampled_cameras = params.gap_directed
-          ? gap_directed_cameras(diag.sphere, up, gap.direction, intr, params.gap_directed_views, params.gap_directed_cone_deg)
-          : spiral_cameras(diag.sphere, up, intr, params);
-    }
-    const std::vector<Index> coarse_set = selected;
-    std::vector<Camera> fine_frames;
-    std::vector<std::size_t> fine_train;
-    auto add_frame = [&](const Camera& c, std::size_t k) {
-      if (k != 0 && params.min_frame_content > 0.f &&
-          vcar::detail::content_fraction(scene, coarse_set, c, renderer) < params.min_frame_content)
-        return;
-      fine_frames.push_back(c);
-      fine_train.push_back(k);
-    };
-    for (std::size_t k = 0; k < frames.size(); ++k) add_frame(frames[k], k);
-    for (const Camera& c : diag.sampled_cameras) add_frame(c, static_cast<std::size_t>(-1));
-    vcar::detail::RoundVote fine(scene, &coarse_set, params, true);
-    for (auto& m : train_masks) m.reset();
-    const vcar::detail::RoundTimes t2 = vcar::detail::run_round(
-        "fine round (" + segmenter.request.name + ")", scene, &coarse_set, fine_frames, prompt, renderer, segmenter, params,
-        progress, t_start, [&](std::size_t k, const Mask* m, const RenderOutput* render) {
-          m = usable(m);
-          vcar::detail::vote(fine, fine_frames[k], m, render, scene, &coarse_set, renderer, params);
-          if (fine_train[k] < M) keep_training_mask(order[fine_train[k]], m);
-        }, diag.masks_missing, fine.wants_depth());
-    timing("fine_render", t2.render);
-    timing("fine_segment", t2.total - t2.render - t2.voting);
-    timing("fine_voting", t2.voting);
-    fine.selected(params.tau_fine, selected, scores);
-    diag.n_fine = diag.n_final = selected.size();
-    if (selected.empty()) {
-      diag.note = "the fine vote kept no Gaussian (tau_fine too high for these masks?)";
-      return;
-    }
-  }
-  result.log_scale = {std::vector<float>(selected.size()), std::vector<float>(selected.size()),
-                      std::vector<float>(selected.size())};
-  for (std::size_t k = 0; k < selected.size(); ++k)
-    for (int d = 0; d < 3; ++d) result.log_scale[d][k] = scene.log_scale[d][selected[k]];
-  if (params.enable_abr) {
-    stage("abr");
-    auto ta = Clock::now();
-    BoundaryRefinement abr(scene, selected, params.abr());
-    Mask scratch;
-    for (std::size_t j = 0; j < M; ++j) {
-      if (!train_masks[j]) continue;
-      diag.mask_store_bytes += train_masks[j]->bytes();
-      train_masks[j]->decode(scratch);
-      abr.add_view(train_cameras[j], scratch);
-    }
-    AbrResult a = abr.finish();
-    result.log_scale = std::move(a.log_scale);
-    diag.abr_flagged = a.flagged;
-    diag.abr_compressed = a.compressed;
-    timing("abr", seconds_since(ta));
-  }
-  result.indices = std::move(selected);
-  result.scores = std::move(scores);
-  diag.n_final = result.indices.size();
-}
-
 }  // namespace detail_multi
 
 // A Gaussian selected by several objects stays with the highest score (ties: the earlier
@@ -285,12 +171,7 @@ MultiSegmentation segment_objects(const GaussianScene& scene, const std::vector<
     if (depth) last.emplace(k, std::move(r));
     return img;
   };
-  auto usable = [&](const Mask* m) -> const Mask* {
-    if (!m || !(params.min_mask_fraction > 0.f)) return m;
-    std::size_t fg = 0;
-    for (std::uint8_t v : m->data) fg += v != 0;
-    return static_cast<double>(fg) > params.min_mask_fraction * static_cast<double>(m->pixels()) ? m : nullptr;
-  };
+  auto usable = [&](const Mask* m) { return vcar::detail::usable(m, params); };
   ObjectMaskSink sink = [&](std::size_t k, std::size_t q, const Mask* m) {
     if (k >= frames.size() || q >= K)
       throw Error("segmenter answered frame " + std::to_string(k) + " object " + std::to_string(q), "coarse round");
@@ -338,8 +219,10 @@ MultiSegmentation segment_objects(const GaussianScene& scene, const std::vector<
     votes[o].reset();  // its counters are not needed any more
     detail_multi::OneObject one{&segmenter, ObjectRequest{o, objects[o].name, objects[o].prompt}};
     const auto to = Clock::now();
-    detail_multi::finish_object(scene, train_cameras, objects[o].prompt, renderer, one, params, progress, t_start,
-                                train_masks[o], std::move(selected), std::move(scores), out.objects[o]);
+    // Stages 2 and 3 exactly as vcar::segment runs them after its coarse vote.
+    vcar::detail::refine(scene, train_cameras, objects[o].prompt, renderer, one, params, progress, t_start,
+                         train_masks[o], std::move(selected), std::move(scores), out.objects[o],
+                         "fine round (" + objects[o].name + ")");
     out.objects[o].diagnostics.timings_s.emplace_back("total", seconds_since(to));
   }
   out.conflicts = resolve_conflicts(out.objects, scene.size(), out.lost);

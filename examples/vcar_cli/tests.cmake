@@ -9,7 +9,7 @@ set(_picker "/usr/bin/python3 '${PROJECT_SOURCE_DIR}/examples/segmenters/colour_
 # vcar_cli_test(NAME <name> ARGS <a|b|c> RC <code> [FIXTURES_SETUP f] [FIXTURES_REQUIRED f]
 #               [CHECKS -DFILES=... -DJSON_KEYS=...])
 function(vcar_cli_test)
-  cmake_parse_arguments(T "" "NAME;ARGS;RC;FIXTURES_SETUP;FIXTURES_REQUIRED" "CHECKS" ${ARGN})
+  cmake_parse_arguments(T "" "NAME;ARGS;RC;FIXTURES_SETUP" "CHECKS;FIXTURES_REQUIRED" ${ARGN})
   add_test(NAME cli/${T_NAME}
     COMMAND ${CMAKE_COMMAND} -DVCAR=$<TARGET_FILE:vcar_cli> "-DARGS=${T_ARGS}" -DRC=${T_RC} ${T_CHECKS}
             -P ${_cli_check})

@@ -235,6 +235,132 @@ void vote(RoundVote& voting, const Camera& cam, const Mask* m, const RenderOutpu
   voting.add_view(cam, m, render, params.depth_tolerance);
 }
 
+// The mask, or null when it is below min_mask_fraction (conventions §7: the code drops tiny masks).
+inline const Mask* usable(const Mask* m, const VcarParams& params) {
+  if (!m || !(params.min_mask_fraction > 0.f)) return m;
+  std::size_t fg = 0;
+  for (std::uint8_t v : m->data) fg += v != 0;
+  return static_cast<double>(fg) > params.min_mask_fraction * static_cast<double>(m->pixels()) ? m : nullptr;
+}
+
+// Stages 2 and 3 of vcar::segment from the coarse selection `selected` (scores: its R_i):
+// sphere (Eq. 4-5), view completeness (Eq. 6), SSS and the fine round (Eq. 7-8), ABR (Eq. 9-14).
+// `train_masks` holds the coarse round's training masks (indexed by training view) for ABR and
+// takes the fine round's. Fills result (indices, scores, log-scales, diagnostics); false when a
+// stage selected nothing (diagnostics.note says which). The CLI's several-objects run calls this
+// once per object after one shared coarse round.
+template <Renderer R, Segmenter S>
+bool refine(const GaussianScene& scene, const std::vector<Camera>& train_cameras, const Prompt& prompt, R& renderer,
+            S& segmenter, const VcarParams& params, const ProgressCallback& progress, Clock::time_point t_start,
+            std::vector<std::optional<RleMask>>& train_masks, std::vector<Index> selected, std::vector<float> scores,
+            SegmentationResult& result, std::string_view fine_round = "fine round") {
+  Diagnostics& diag = result.diagnostics;
+  auto stage = [&](std::string_view name) {
+    if (progress && !progress({name, 0, 0, seconds_since(t_start)})) throw Cancelled(std::string(name));
+  };
+  auto timing = [&](std::string name, double s) { diag.timings_s.emplace_back(std::move(name), s); };
+  const std::size_t M = train_cameras.size();
+  const std::size_t ref = prompt.reference_view;
+  const std::vector<std::size_t> order = training_order(M, ref);
+  std::vector<Camera> frames;
+  for (std::size_t j : order) frames.push_back(train_cameras[j]);
+  auto keep_training_mask = [&](std::size_t k, const Mask* m) {  // k: frame of the round
+    if (k < M) train_masks[order[k]] = m && params.enable_abr ? std::optional<RleMask>(RleMask::encode(*m)) : std::nullopt;
+  };
+  diag.n_coarse = diag.n_fine = diag.n_final = selected.size();
+  if (selected.empty()) {
+    diag.note = "the coarse stage selected no Gaussian (no training view shows the target, or every mask is empty)";
+    return false;
+  }
+
+  // ---- Stage 2: sphere (Eq. 4-5), view completeness (Eq. 6), SSS (Eq. 7-8), fine VWV. The
+  // sphere and the gap only serve SSS: with SSS off they are not computed.
+  AngularGap gap;
+  if (params.enable_sss) {
+    stage("view_completeness");
+    auto tv = Clock::now();
+    diag.sphere = robust_sphere(scene, selected, train_cameras[ref].position(), params.eta);
+    const auto valid = valid_cameras(scene, selected, train_cameras, params.rho_min);
+    diag.valid_cameras = valid.size();
+    std::vector<Eigen::Vector3f> positions;
+    for (std::size_t j : valid) positions.push_back(train_cameras[j].position());
+    gap = max_angular_gap(fibonacci_lattice(params.K), headings(diag.sphere.c, positions));
+    diag.max_gap_deg = gap.Delta_max_deg;
+    diag.gap_direction = gap.direction;
+    timing("vca", seconds_since(tv));
+  }
+
+  diag.sss_triggered = params.enable_sss && (params.force_sss || gap.Delta_max_deg > params.Delta_th_deg);
+  if (diag.sss_triggered || params.force_fine_round) {
+    stage("sss");
+    if (diag.sss_triggered) {
+      const Eigen::Vector3f up = estimate_scene_up(train_cameras);
+      const Intrinsics intr = sampled_view_intrinsics(train_cameras[ref], params.sampled_intrinsics, params.sampled_fov_deg);
+      diag.sampled_cameras = params.gap_directed
+          ? gap_directed_cameras(diag.sphere, up, gap.direction, intr, params.gap_directed_views, params.gap_directed_cone_deg)
+          : spiral_cameras(diag.sphere, up, intr, params);
+    }
+    const std::vector<Index> coarse_set = selected;
+    std::vector<Camera> fine_frames;
+    std::vector<std::size_t> fine_train;  // fine frame -> training frame k (npos: sampled)
+    auto add_frame = [&](const Camera& c, std::size_t k) {
+      // conventions §7: the code drops near-empty frames of this round, the prompt frame excepted.
+      if (k != 0 && params.min_frame_content > 0.f &&
+          content_fraction(scene, coarse_set, c, renderer) < params.min_frame_content)
+        return;
+      fine_frames.push_back(c);
+      fine_train.push_back(k);
+    };
+    for (std::size_t k = 0; k < frames.size(); ++k) add_frame(frames[k], k);
+    for (const Camera& c : diag.sampled_cameras) add_frame(c, static_cast<std::size_t>(-1));
+    RoundVote fine(scene, &coarse_set, params, true);
+    for (auto& m : train_masks) m.reset();
+    const RoundTimes t2 = run_round(
+        fine_round, scene, &coarse_set, fine_frames, prompt, renderer, segmenter, params,
+        progress, t_start, [&](std::size_t k, const Mask* m, const RenderOutput* render) {
+          m = usable(m, params);
+          vote(fine, fine_frames[k], m, render, scene, &coarse_set, renderer, params);
+          if (fine_train[k] < M) keep_training_mask(fine_train[k], m);
+        }, diag.masks_missing, fine.wants_depth());
+    timing("fine_render", t2.render);
+    timing("fine_segment", t2.total - t2.render - t2.voting);
+    timing("fine_voting", t2.voting);
+    fine.selected(params.tau_fine, selected, scores);
+    diag.n_fine = diag.n_final = selected.size();
+    if (selected.empty()) {
+      diag.note = "the fine vote kept no Gaussian (tau_fine too high for these masks?)";
+      return false;
+    }
+  }
+
+  // ---- Stage 3: ABR on the training views with masks from the latest round (Eq. 9-14, B).
+  result.log_scale = {std::vector<float>(selected.size()), std::vector<float>(selected.size()),
+                      std::vector<float>(selected.size())};
+  for (std::size_t k = 0; k < selected.size(); ++k)
+    for (int d = 0; d < 3; ++d) result.log_scale[d][k] = scene.log_scale[d][selected[k]];
+  if (params.enable_abr) {
+    stage("abr");
+    auto ta = Clock::now();
+    BoundaryRefinement abr(scene, selected, params.abr());
+    Mask scratch;
+    for (std::size_t j = 0; j < M; ++j) {
+      if (!train_masks[j]) continue;
+      diag.mask_store_bytes += train_masks[j]->bytes();
+      train_masks[j]->decode(scratch);
+      abr.add_view(train_cameras[j], scratch);
+    }
+    AbrResult a = abr.finish();
+    result.log_scale = std::move(a.log_scale);
+    diag.abr_flagged = a.flagged;
+    diag.abr_compressed = a.compressed;
+    timing("abr", seconds_since(ta));
+  }
+  result.indices = std::move(selected);
+  result.scores = std::move(scores);
+  diag.n_final = result.indices.size();
+  return true;
+}
+
 }  // namespace detail
 
 // Segments the object prompted on train_cameras[prompt.reference_view].
@@ -276,12 +402,7 @@ SegmentationResult segment(const GaussianScene& scene, const std::vector<Camera>
   auto keep_training_mask = [&](std::size_t k, const Mask* m) {
     if (k < M) train_masks[order[k]] = m && params.enable_abr ? std::optional<RleMask>(RleMask::encode(*m)) : std::nullopt;
   };
-  auto usable = [&](const Mask* m) -> const Mask* {
-    if (!m || !(params.min_mask_fraction > 0.f)) return m;  // conventions §7: the code drops tiny masks
-    std::size_t fg = 0;
-    for (std::uint8_t v : m->data) fg += v != 0;
-    return static_cast<double>(fg) > params.min_mask_fraction * static_cast<double>(m->pixels()) ? m : nullptr;
-  };
+  auto usable = [&](const Mask* m) { return detail::usable(m, params); };
 
   // ---- Stage 1: coarse VWV on the training views, rendered from the whole scene (Eq. 1-3;
   // with edge_band, Eq. R1-R2).
@@ -300,101 +421,10 @@ SegmentationResult segment(const GaussianScene& scene, const std::vector<Camera>
   std::vector<Index> selected;
   std::vector<float> scores;
   coarse.selected(params.tau_coarse, selected, scores);
-  diag.n_coarse = diag.n_fine = diag.n_final = selected.size();
-  if (selected.empty()) {
-    diag.note = "the coarse stage selected no Gaussian (no training view shows the target, or every mask is empty)";
-    timing("total", seconds_since(t_start));
-    return result;
-  }
-
-  // ---- Stage 2: sphere (Eq. 4-5), view completeness (Eq. 6), SSS (Eq. 7-8), fine VWV. The
-  // sphere and the gap only serve SSS: with SSS off they are not computed.
-  AngularGap gap;
-  if (params.enable_sss) {
-    stage("view_completeness");
-    auto tv = Clock::now();
-    diag.sphere = robust_sphere(scene, selected, train_cameras[ref].position(), params.eta);
-    const auto valid = valid_cameras(scene, selected, train_cameras, params.rho_min);
-    diag.valid_cameras = valid.size();
-    std::vector<Eigen::Vector3f> positions;
-    for (std::size_t j : valid) positions.push_back(train_cameras[j].position());
-    gap = max_angular_gap(fibonacci_lattice(params.K), headings(diag.sphere.c, positions));
-    diag.max_gap_deg = gap.Delta_max_deg;
-    diag.gap_direction = gap.direction;
-    timing("vca", seconds_since(tv));
-  }
-
-  diag.sss_triggered = params.enable_sss && (params.force_sss || gap.Delta_max_deg > params.Delta_th_deg);
-  if (diag.sss_triggered || params.force_fine_round) {
-    stage("sss");
-    if (diag.sss_triggered) {
-      const Eigen::Vector3f up = estimate_scene_up(train_cameras);
-      const Intrinsics intr = sampled_view_intrinsics(train_cameras[ref], params.sampled_intrinsics, params.sampled_fov_deg);
-      diag.sampled_cameras = params.gap_directed
-          ? gap_directed_cameras(diag.sphere, up, gap.direction, intr, params.gap_directed_views, params.gap_directed_cone_deg)
-          : spiral_cameras(diag.sphere, up, intr, params);
-    }
-    const std::vector<Index> coarse_set = selected;
-    std::vector<Camera> fine_frames;
-    std::vector<std::size_t> fine_train;  // fine frame -> training frame k (npos: sampled)
-    auto add_frame = [&](const Camera& c, std::size_t k) {
-      // conventions §7: the code drops near-empty frames of this round, the prompt frame excepted.
-      if (k != 0 && params.min_frame_content > 0.f &&
-          detail::content_fraction(scene, coarse_set, c, renderer) < params.min_frame_content)
-        return;
-      fine_frames.push_back(c);
-      fine_train.push_back(k);
-    };
-    for (std::size_t k = 0; k < frames.size(); ++k) add_frame(frames[k], k);
-    for (const Camera& c : diag.sampled_cameras) add_frame(c, static_cast<std::size_t>(-1));
-    detail::RoundVote fine(scene, &coarse_set, params, true);
-    for (auto& m : train_masks) m.reset();
-    const detail::RoundTimes t2 = detail::run_round(
-        "fine round", scene, &coarse_set, fine_frames, prompt, renderer, segmenter, params,
-        progress, t_start, [&](std::size_t k, const Mask* m, const RenderOutput* render) {
-          m = usable(m);
-          detail::vote(fine, fine_frames[k], m, render, scene, &coarse_set, renderer, params);
-          if (fine_train[k] < M) keep_training_mask(fine_train[k], m);
-        }, diag.masks_missing, fine.wants_depth());
-    timing("fine_render", t2.render);
-    timing("fine_segment", t2.total - t2.render - t2.voting);
-    timing("fine_voting", t2.voting);
-    fine.selected(params.tau_fine, selected, scores);
-    diag.n_fine = diag.n_final = selected.size();
-    if (selected.empty()) {
-      diag.note = "the fine vote kept no Gaussian (tau_fine too high for these masks?)";
-      timing("total", seconds_since(t_start));
-      return result;
-    }
-  }
-
-  // ---- Stage 3: ABR on the training views with masks from the latest round (Eq. 9-14, B).
-  result.log_scale = {std::vector<float>(selected.size()), std::vector<float>(selected.size()),
-                      std::vector<float>(selected.size())};
-  for (std::size_t k = 0; k < selected.size(); ++k)
-    for (int d = 0; d < 3; ++d) result.log_scale[d][k] = scene.log_scale[d][selected[k]];
-  if (params.enable_abr) {
-    stage("abr");
-    auto ta = Clock::now();
-    BoundaryRefinement abr(scene, selected, params.abr());
-    Mask scratch;
-    for (std::size_t j = 0; j < M; ++j) {
-      if (!train_masks[j]) continue;
-      diag.mask_store_bytes += train_masks[j]->bytes();
-      train_masks[j]->decode(scratch);
-      abr.add_view(train_cameras[j], scratch);
-    }
-    AbrResult a = abr.finish();
-    result.log_scale = std::move(a.log_scale);
-    diag.abr_flagged = a.flagged;
-    diag.abr_compressed = a.compressed;
-    timing("abr", seconds_since(ta));
-  }
-  result.indices = std::move(selected);
-  result.scores = std::move(scores);
-  diag.n_final = result.indices.size();
+  const bool complete = detail::refine(scene, train_cameras, prompt, renderer, segmenter, params, progress, t_start,
+                                       train_masks, std::move(selected), std::move(scores), result);
   timing("total", seconds_since(t_start));
-  stage("done");
+  if (complete) stage("done");
   return result;
 }
 
