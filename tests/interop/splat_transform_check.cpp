@@ -8,6 +8,7 @@
 // Exit 0: all within; 1: something is not; 77: splat-transform cannot run here (CTest SKIP).
 //   interop_test_splat_transform <tests/interop/splat-transform> <data dir> <work dir>
 #include <algorithm>
+#include <deque>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -77,7 +78,7 @@ struct Stat {
 
 struct Report {
   std::string conversion;
-  std::vector<Stat> stats;
+  std::deque<Stat> stats;  // stable references: stat() hands out references across push_backs
   bool failed = false;
   std::string note;
   Stat& stat(const std::string& name) {
