@@ -126,31 +126,9 @@ int run_segment_objects(const SegmentOptions& o, const GlobalOptions& g) {
       if (ob.object_id < 0)
         throw CliError(exit_bad_input, "object '" + ob.name + "' has no \"object_id\": the oracle needs the world's object", o.prompts + " (--prompts)");
   std::optional<io::ExternalSegmenter> external;
-  if (!o.segmenter_cmd.empty()) {
-    io::ExternalSegmenterOptions so;
-    so.timeout_s = o.segmenter_timeout;
-    so.keep_requests = o.keep_requests;
-    so.work_dir = fs::path(o.out) / "requests";
-    so.inherit_output = o.segmenter_output;
-    so.cancelled = [] { return interrupted().load(); };
-    so.progress = [&progress](const io::ExternalProgress& p) { progress.external(p); };
-    try {
-      external.emplace(o.segmenter_cmd, so);
-    } catch (const Error& e) {
-      throw CliError(exit_usage, e.what());
-    }
-    check_program(external->argv().front());
-  }
-  progress.message("reading scene");
-  const GaussianScene scene = load_scene(o.scene);
-  progress.done();
-  check_cameras_face_scene(scene, cams, o.cameras, o.opengl_cameras);
+  GaussianScene scene;
   std::optional<OracleDataset> oracle_ds;
-  if (!o.oracle.empty()) {
-    progress.message("reading the oracle dataset");
-    oracle_ds.emplace(load_oracle_dataset(o.oracle));
-    check_oracle_scene(scene, oracle_ds->world.scene, o.oracle);
-  }
+  open_segment_sources(o, cams, progress, external, scene, oracle_ds);
 
   cpu::TiledRenderer cpu_renderer;
   std::optional<PhotoRenderer> photos;

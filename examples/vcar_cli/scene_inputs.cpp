@@ -3,6 +3,7 @@
 #include <unordered_map>
 
 #include "cli_common.hpp"
+#include "commands.hpp"
 #include "input_checks.hpp"
 #include "vcar/io/cameras.hpp"
 #include "vcar/io/scene_file.hpp"
@@ -50,6 +51,35 @@ OracleDataset load_oracle_dataset(const std::filesystem::path& dir) {
   if (!std::filesystem::is_regular_file(dir / "gt" / "scene.json"))
     throw CliError(exit_bad_input, "not a vcar synth dataset (no gt/scene.json)", dir.string());
   return {synth::load_world(dir)};
+}
+
+void open_segment_sources(const SegmentOptions& o, const std::vector<Camera>& cams, ProgressLine& progress,
+                          std::optional<io::ExternalSegmenter>& external, GaussianScene& scene,
+                          std::optional<OracleDataset>& oracle) {
+  if (!o.segmenter_cmd.empty()) {
+    io::ExternalSegmenterOptions so;
+    so.timeout_s = o.segmenter_timeout;
+    so.keep_requests = o.keep_requests;
+    so.work_dir = std::filesystem::path(o.out) / "requests";
+    so.inherit_output = o.segmenter_output;
+    so.cancelled = [] { return interrupted().load(); };
+    so.progress = [&progress](const io::ExternalProgress& p) { progress.external(p); };
+    try {
+      external.emplace(o.segmenter_cmd, so);
+    } catch (const Error& e) {
+      throw CliError(exit_usage, e.what());
+    }
+    check_program(external->argv().front());
+  }
+  progress.message("reading scene");
+  scene = load_scene(o.scene);
+  progress.done();
+  check_cameras_face_scene(scene, cams, o.cameras, o.opengl_cameras);
+  if (!o.oracle.empty()) {
+    progress.message("reading the oracle dataset");
+    oracle.emplace(load_oracle_dataset(o.oracle));
+    check_oracle_scene(scene, oracle->world.scene, o.oracle);
+  }
 }
 
 }  // namespace vcar::cli

@@ -2,11 +2,13 @@
 // Reading the inputs of the commands: scenes, cameras, mask folders and synthetic datasets.
 // Failures are vcar::Error naming the file (exit code 2).
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "vcar/core/camera.hpp"
 #include "vcar/core/gaussian_scene.hpp"
+#include "vcar/io/external_segmenter.hpp"
 #include "vcar/io/mask_folder_segmenter.hpp"
 #include "vcar/synth/world.hpp"
 
@@ -24,5 +26,14 @@ struct OracleDataset {
   synth::World world;
 };
 OracleDataset load_oracle_dataset(const std::filesystem::path& dir);
+
+struct SegmentOptions;
+class ProgressLine;
+// What both segment commands open before segmenting, in the order that fails fastest: the
+// external segmenter (--segmenter-cmd; its program checked before any frame is rendered), the
+// scene (checked against the cameras) and the oracle dataset (--oracle; checked against the scene).
+void open_segment_sources(const SegmentOptions& o, const std::vector<Camera>& cams, ProgressLine& progress,
+                          std::optional<io::ExternalSegmenter>& external, GaussianScene& scene,
+                          std::optional<OracleDataset>& oracle);
 
 }  // namespace vcar::cli
