@@ -6,6 +6,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "vcar/core/parallel.hpp"
@@ -32,14 +33,23 @@ static_assert(sizeof(PackedSplat) == 64, "one cache line per splat");
 // rectangle is empty is culled.
 struct ProjectedSplats {
   std::vector<PackedSplat> splat;
-  std::vector<std::int32_t> tx0, ty0, tx1, ty1;  // touched tiles [tx0, tx1) x [ty0, ty1)
+  std::vector<std::uint64_t> rect;  // touched tiles [tx0, tx1) x [ty0, ty1), 16 bits each (pack_rect)
 
   void resize(std::size_t n) {
     splat.resize(n);
-    for (auto* v : {&tx0, &ty0, &tx1, &ty1}) v->resize(n);
+    rect.resize(n);
   }
   std::size_t size() const { return splat.size(); }
 };
+
+// Tile rectangle [tx0, tx1) x [ty0, ty1) in one word (tile counts are below 2^16).
+inline std::uint64_t pack_rect(std::int32_t tx0, std::int32_t tx1, std::int32_t ty0, std::int32_t ty1) {
+  return static_cast<std::uint64_t>(tx0) | static_cast<std::uint64_t>(tx1) << 16 |
+         static_cast<std::uint64_t>(ty0) << 32 | static_cast<std::uint64_t>(ty1) << 48;
+}
+inline bool rect_empty(std::uint64_t r) {
+  return (r & 0xffff) >= ((r >> 16) & 0xffff) || ((r >> 32) & 0xffff) >= (r >> 48);
+}
 
 // Tile lists as one flat array: ids[start[t] .. start[t+1]) are depth ranks j (splat[j] is the
 // packed splat, order[j] its drawn index k) touching tile t, front to back; equal depths keep
@@ -49,9 +59,9 @@ struct TileBins {
   std::vector<PackedSplat> splat;           // splats that touch a tile, in depth order
   std::vector<std::uint32_t> ids;
   std::vector<std::int64_t> start;          // tiles + 1 offsets
-  std::vector<std::uint32_t> order, tmp;    // scratch: splats by depth
+  std::vector<std::uint32_t> order, tmp;    // splats that touch a tile, by depth (scratch: tmp)
   std::vector<std::uint32_t> key, key_tmp;  // scratch: depth bits
-  std::vector<std::uint64_t> rect;          // scratch: tile rectangles in depth order, 4 x 16 bit
+  std::vector<std::uint64_t> rect;          // scratch: tile rectangles in depth order
   std::vector<std::int64_t> chunk_offset;   // scratch: per (chunk, tile) write cursor
   int tiles() const { return tiles_x * tiles_y; }
 };
@@ -60,40 +70,48 @@ struct TileBins {
 inline constexpr std::int64_t binning_chunks = 64;
 
 // Splats that touch a tile, sorted by camera depth with ties by index: a stable LSD radix sort
-// of the depth bits (depth >= near plane > 0, so the bits order like the floats).
+// of the depth bits in three 11-bit digits (depth >= near plane > 0, so the bits order like the
+// floats), the three histograms taken in one pass.
 inline void sort_by_depth(const ProjectedSplats& s, TileBins& bins) {
   const std::size_t n = s.size();
-  bins.order.clear();
-  bins.key.clear();
+  bins.order.resize(n);
+  bins.key.resize(n);
+  std::size_t m = 0;
   for (std::size_t k = 0; k < n; ++k)
-    if (s.tx0[k] < s.tx1[k] && s.ty0[k] < s.ty1[k]) {
-      bins.order.push_back(static_cast<std::uint32_t>(k));
-      bins.key.push_back(std::bit_cast<std::uint32_t>(s.splat[k].depth));
+    if (!rect_empty(s.rect[k])) {
+      bins.order[m] = static_cast<std::uint32_t>(k);
+      bins.key[m++] = std::bit_cast<std::uint32_t>(s.splat[k].depth);
     }
-  const std::size_t m = bins.order.size();
+  bins.order.resize(m);
+  bins.key.resize(m);
   bins.tmp.resize(m);
   bins.key_tmp.resize(m);
-  for (int shift = 0; shift < 32; shift += 8) {
-    std::size_t count[257] = {};
-    for (std::size_t j = 0; j < m; ++j) ++count[((bins.key[j] >> shift) & 0xff) + 1];
-    if (count[((bins.key.empty() ? 0 : bins.key[0] >> shift) & 0xff) + 1] == m) continue;  // one bucket
-    for (int b = 0; b < 256; ++b) count[b + 1] += count[b];
+  constexpr int digits = 3, bits = 11, buckets = 1 << bits;
+  std::vector<std::size_t> count(static_cast<std::size_t>(digits) * buckets, 0);
+  for (std::size_t j = 0; j < m; ++j)
+    for (int d = 0; d < digits; ++d) ++count[d * buckets + ((bins.key[j] >> (d * bits)) & (buckets - 1))];
+  for (int d = 0; d < digits; ++d) {
+    std::size_t* c = count.data() + d * buckets;
+    const int shift = d * bits;
+    if (m == 0 || c[(bins.key[0] >> shift) & (buckets - 1)] == m) continue;  // one bucket
+    std::size_t run = 0;
+    for (int b = 0; b < buckets; ++b) run += std::exchange(c[b], run);
     for (std::size_t j = 0; j < m; ++j) {
-      const std::size_t dst = count[(bins.key[j] >> shift) & 0xff]++;
+      const std::size_t dst = c[(bins.key[j] >> shift) & (buckets - 1)]++;
       bins.tmp[dst] = bins.order[j];
       bins.key_tmp[dst] = bins.key[j];
     }
     bins.order.swap(bins.tmp);
     bins.key.swap(bins.key_tmp);
   }
-  // The rectangles and splats in depth order, so later passes read memory in sequence.
+  // The splats and rectangles in depth order, so later passes read memory in sequence (a
+  // tile's list then climbs through memory).
   bins.rect.resize(m);
   bins.splat.resize(m);
   parallel_for(static_cast<std::int64_t>(m), [&](std::int64_t j) {
     const std::uint32_t k = bins.order[j];
     bins.splat[j] = s.splat[k];
-    bins.rect[j] = static_cast<std::uint64_t>(s.tx0[k]) | static_cast<std::uint64_t>(s.tx1[k]) << 16 |
-                   static_cast<std::uint64_t>(s.ty0[k]) << 32 | static_cast<std::uint64_t>(s.ty1[k]) << 48;
+    bins.rect[j] = s.rect[k];
   });
 }
 

@@ -74,9 +74,12 @@ inline void splat_colour(PackedSplat& s, ColourFn& colour, float rgb[3]) {
   }
 }
 
-// Colour functor for passes that need none (contributions only).
+// Colour functor for passes that need none (contributions only). A colour functor also has
+// prefetch(k): asks for the inputs of colour(k) a few splats ahead, so that their cache misses
+// overlap the compositing of the splats in between.
 struct NoColour {
   void operator()(std::uint32_t, float* rgb) const { rgb[0] = rgb[1] = rgb[2] = 0.f; }
+  void prefetch(std::uint32_t) const {}
 };
 
 // Composites the splats ids[0..count) (front to back) into tile (x0, y0) of size
@@ -99,9 +102,17 @@ void composite_tile(PackedSplat* splat, const std::uint32_t* ids, std::int64_t c
   for (int c = 0; c < tile_size; ++c) lane_x[c] = static_cast<float>(x0 + c) + 0.5f;
   const Lane zero(0.f), one(1.f), amax(alpha_max), askip(alpha_skip), tstop(T_stop);
 
-  constexpr std::int64_t ahead = 8;  // splats are scattered in memory: fetch a few ahead
+  // Splats are scattered in memory: each is fetched 2 * ahead entries before its turn, and the
+  // colour inputs of one not yet shaded `ahead` entries before.
+  constexpr std::int64_t ahead = 8;
   for (std::int64_t e = 0; e < count; ++e) {
-    if (e + ahead < count) __builtin_prefetch(splat + ids[e + ahead]);
+    if (e + 2 * ahead < count) __builtin_prefetch(splat + ids[e + 2 * ahead]);
+    if constexpr (Colour) {
+      if (e + ahead < count) {
+        PackedSplat& a = splat[ids[e + ahead]];
+        if (std::atomic_ref<std::uint32_t>(a.shaded).load(std::memory_order_relaxed) == 0) colour.prefetch(a.k);
+      }
+    }
     PackedSplat& s = splat[ids[e]];
     const float mx = s.mx, my = s.my, rx = s.rx, ry = s.ry;
     // Rows and columns of the tile inside the bounding box, widened by one pixel for rounding.
@@ -138,7 +149,8 @@ void composite_tile(PackedSplat* splat, const std::uint32_t* ids, std::int64_t c
         if (!simd::any(live && (sigma <= lane_sig_max))) continue;  // alpha < 1/255: no exp
         const Lane alpha = simd::min(amax, op * simd::exp(-sigma));
         const auto ok = live && (sigma >= zero) && (alpha >= askip);
-        if (!simd::any(ok)) continue;
+        // No branch on any(ok): it waits for exp and mispredicts often; with no lane ok, w is 0
+        // and T is stored back unchanged, so the sums below keep their bits.
         const Lane T = Lane::load_aligned(st.T + p);
         const Lane nT = T * (one - alpha);
         const auto stop = ok && (nT <= tstop);
@@ -154,7 +166,7 @@ void composite_tile(PackedSplat* splat, const std::uint32_t* ids, std::int64_t c
           }
         }
         if constexpr (Colour) {
-          if (!have_rgb) {
+          if (!have_rgb && simd::any(take)) {  // colour only for a splat that is composited
             float rgb[3];
             splat_colour(s, colour, rgb);
             cr = Lane(rgb[0]), cg = Lane(rgb[1]), cbl = Lane(rgb[2]);

@@ -5,6 +5,7 @@
 // multi-threaded over tiles and SIMD over the pixels of a tile. Results are bit-identical for
 // any thread count. One renderer serves one call at a time (it keeps scratch buffers).
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -27,12 +28,18 @@ struct TiledRendererOptions {
   int num_threads = 0;            // 0: the current vcar::max_threads()
 };
 
+// Wall time of the last call's stages (benchmarks/bench_render prints them).
+struct TiledRendererTimes {
+  double project_ms = 0, bin_ms = 0, composite_ms = 0;
+};
+
 class TiledRenderer {
 public:
   TiledRenderer() = default;
   explicit TiledRenderer(TiledRendererOptions o) : opt_(o) {}
   const TiledRendererOptions& options() const { return opt_; }
   TiledRendererOptions& options() { return opt_; }
+  const TiledRendererTimes& last_times() const { return times_; }
 
   // Renders rgb (bg * T_final behind), alpha = 1 - T_final and, if asked, depth = sum z alpha T.
   RenderOutput render(const RenderRequest& q) {
@@ -40,15 +47,8 @@ public:
     ThreadScope threads(opt_.num_threads);
     prepare(q);
     const int W = cam.width, H = cam.height;
-    // SH colour, evaluated lazily for the splats that get composited (splat_colour).
-    const GaussianScene& sc = *q.scene;
-    const Eigen::Vector3f eye = cam.position();
-    const std::size_t B3 = static_cast<std::size_t>(sc.sh_coeffs()) * 3;
-    auto colour = [&](std::uint32_t k, float* rgb) {
-      const std::size_t i = scene_index(q, k);
-      const Eigen::Vector3f c = sh_to_rgb(sc.sh_degree, sc.sh.data() + i * B3, sc.mu(i) - eye);
-      rgb[0] = c[0], rgb[1] = c[1], rgb[2] = c[2];
-    };
+    const SHColour colour{&q, cam.position()};
+    const auto t0 = Clock::now();
     RenderOutput out;
     out.rgb = ImageF(W, H, 3);
     out.alpha = ImageF(W, H, 1);
@@ -73,6 +73,7 @@ public:
           if (q.want_depth) out.depth.data[o] = st.D[p];
         }
     });
+    times_.composite_ms = ms_since(t0);
     return out;
   }
 
@@ -91,6 +92,7 @@ public:
     ThreadScope threads(opt_.num_threads);
     prepare(q);
     const int W = cam.width, H = cam.height;
+    const auto t0 = Clock::now();
     entry_w_.assign(bins_.ids.size(), 0.f);
     entry_wfg_.assign(bins_.ids.size(), 0.f);
     parallel_for_dynamic(bins_.tiles(), [&](std::int64_t t) {
@@ -111,9 +113,34 @@ public:
       acc.weight[i] += entry_w_[e];
       acc.weight_fg[i] += entry_wfg_[e];
     }
+    times_.composite_ms = ms_since(t0);
   }
 
 private:
+  using Clock = std::chrono::steady_clock;
+  static double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+  // SH colour of drawn Gaussian k, evaluated lazily for the splats that get composited
+  // (splat_colour); prefetch(k) asks for its mean and coefficients ahead of time.
+  struct SHColour {
+    const RenderRequest* q;
+    Eigen::Vector3f eye;
+    void operator()(std::uint32_t k, float* rgb) const {
+      const GaussianScene& sc = *q->scene;
+      const std::size_t i = scene_index(*q, k), B3 = static_cast<std::size_t>(sc.sh_coeffs()) * 3;
+      const Eigen::Vector3f c = sh_to_rgb(sc.sh_degree, sc.sh.data() + i * B3, sc.mu(i) - eye);
+      rgb[0] = c[0], rgb[1] = c[1], rgb[2] = c[2];
+    }
+    void prefetch(std::uint32_t k) const {
+      const GaussianScene& sc = *q->scene;
+      const std::size_t i = scene_index(*q, k), B3 = static_cast<std::size_t>(sc.sh_coeffs()) * 3;
+      for (int d = 0; d < 3; ++d) __builtin_prefetch(sc.mean[d].data() + i);
+      const char* c = reinterpret_cast<const char*>(sc.sh.data() + i * B3);
+      for (std::size_t b = 0; b < B3 * sizeof(float); b += 64) __builtin_prefetch(c + b);
+      __builtin_prefetch(c + B3 * sizeof(float) - 1);  // the last line when unaligned
+    }
+  };
+
   // Sets the thread count for one call (restored afterwards); 0 leaves it as it is.
   struct ThreadScope {
     int saved = 0;
@@ -133,9 +160,9 @@ private:
     if (!q.scene || !q.camera) throw Error("request needs a scene and a camera", "RenderRequest");
     const Camera& cam = *q.camera;
     cam.validate();
-    if (cam.width > (1 << 20) || cam.height > (1 << 20) ||
+    if (cam.width > 65535 * tile_size || cam.height > 65535 * tile_size ||  // tile indices in 16 bits
         static_cast<std::int64_t>(cam.width) * cam.height > (std::int64_t{1} << 31) - 1)
-      throw Error("image larger than the CPU renderer supports (2^31 pixels)", "view '" + cam.name + "'");
+      throw Error("image larger than the CPU renderer supports (65535 tiles a side, 2^31 pixels)", "view '" + cam.name + "'");
     const GaussianScene& sc = *q.scene;
     const std::size_t n = sc.size();
     for (int d = 0; d < 3; ++d)
@@ -182,6 +209,7 @@ private:
     const int tiles_y = (cam.height + tile_size - 1) / tile_size;
     ProjectedSplats& s = splats_;
     const ProjectionParams& pp = opt_.projection;
+    const auto t0 = Clock::now();
     parallel_chunks(static_cast<std::int64_t>(n), 4096, [&](std::int64_t, std::int64_t b, std::int64_t e) {
       for (std::int64_t k = b; k < e; ++k) {
         const std::size_t i = scene_index(q, static_cast<std::size_t>(k));
@@ -190,23 +218,29 @@ private:
         const Eigen::Vector3f mu = sc.mu(i);
         const float opacity = sc.opacity(i);
         const ProjectedGaussian g = project_gaussian(cam, mu, sc.R(i), log_s.array().exp().matrix(), opacity, pp);
-        s.tx0[k] = s.tx1[k] = s.ty0[k] = s.ty1[k] = 0;
+        s.rect[k] = 0;
         if (!g.valid || !g.on_screen) continue;  // culled (gsplat)
         PackedSplat& ps = s.splat[k];
         ps = {g.mean.x(), g.mean.y(), static_cast<float>(g.radius_x), static_cast<float>(g.radius_y),
               g.conic[0], g.conic[1], g.conic[2], std::log(opacity / pp.alpha_min),
               opacity, g.depth, 0.f, 0.f, 0.f, static_cast<std::uint32_t>(k), 0u};
-        tile_rect(ps.mx, ps.rx, tiles_x, s.tx0[k], s.tx1[k]);
-        tile_rect(ps.my, ps.ry, tiles_y, s.ty0[k], s.ty1[k]);
+        std::int32_t tx0, tx1, ty0, ty1;
+        tile_rect(ps.mx, ps.rx, tiles_x, tx0, tx1);
+        tile_rect(ps.my, ps.ry, tiles_y, ty0, ty1);
+        s.rect[k] = pack_rect(tx0, tx1, ty0, ty1);
       }
     });
+    const auto t1 = Clock::now();
+    times_.project_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
     bin_tiles(splats_, cam.width, cam.height, bins_);
+    times_.bin_ms = ms_since(t1);
   }
 
   TiledRendererOptions opt_{};
   ProjectedSplats splats_;
   TileBins bins_;
   std::vector<float> entry_w_, entry_wfg_;  // per (tile, splat) entry partial sums
+  TiledRendererTimes times_{};
 };
 
 static_assert(ContributionRenderer<TiledRenderer>);
