@@ -350,3 +350,55 @@ TEST_CASE("bad input names what is at fault") {
     CHECK(std::string(e.what()).find("IMG_3") != std::string::npos);
   }
 }
+
+TEST_CASE("views decided per chunk or per Gaussian from mask tiles equal observe_gaussian one by one") {
+  // Small Gaussians filling a ball seen inside a large disc mask: most chunks and Gaussians are
+  // decided from the tiles (no centre on foreground, or every endpoint on foreground); the
+  // counts and minima must be those of observe_gaussian called for every Gaussian and view.
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<float> U(-1.f, 1.f), L(-5.5f, -3.f);
+  vcar::GaussianScene g;
+  const int n = 8000;
+  g.resize(n);
+  for (int i = 0; i < n; ++i) {
+    Eigen::Vector3f p(U(rng), U(rng), U(rng));
+    if (i % 7 == 0) p *= 2.f;  // some outside the disc's reach
+    g.set(i, p, {L(rng), L(rng), i % 50 == 0 ? -1.f : L(rng)}, {U(rng), U(rng), U(rng), U(rng) + 0.01f}, 0.f);
+  }
+  std::vector<vcar::Index> cand(n);
+  for (int i = 0; i < n; ++i) cand[i] = static_cast<vcar::Index>(i);
+  const vcar::Intrinsics k{200, 150, 170.f, 170.f, 100.f, 75.f};
+  std::vector<vcar::Camera> cams;
+  std::vector<vcar::Mask> masks;
+  for (int v = 0; v < 5; ++v) {
+    const float a = 1.2566f * v;
+    cams.push_back(vcar::Camera::look_at({4.f * std::cos(a), 0.7f, 4.f * std::sin(a)}, {0, 0, 0}, {0, 1, 0}, k,
+                                         "v" + std::to_string(v)));
+    vcar::Mask m(200, 150, 1, 0);
+    for (int y = 0; y < 150; ++y)
+      for (int x = 0; x < 200; ++x) m(x, y) = (x - 100) * (x - 100) + (y - 75) * (y - 75) < (48 + 3 * v) * (48 + 3 * v);
+    masks.push_back(m);
+  }
+  vcar::BoundaryRefinement abr(g, cand);
+  for (int v = 0; v < 5; ++v) abr.add_view(cams[v], masks[v]);
+  const vcar::AbrParams p;
+  int mismatches = 0, eligible = 0, overflowing = 0;
+  for (int i = 0; i < n; ++i) {
+    int n_vis = 0, n_ovf = 0;
+    std::array<float, 3> f{INFINITY, INFINITY, INFINITY};
+    for (int v = 0; v < 5; ++v) {
+      const vcar::AbrObservation o = vcar::observe_gaussian(cams[v], masks[v], g.mu(i), g.R(i), g.scale(i), p);
+      n_vis += o.eligible;
+      n_ovf += o.eligible && o.overflow;
+      if (o.eligible && o.overflow)
+        for (int d = 0; d < 3; ++d) f[d] = std::min(f[d], o.f[d]);
+    }
+    eligible += n_vis;
+    overflowing += n_ovf;
+    mismatches += (abr.n_vis(i) != n_vis) + (abr.n_ovf(i) != n_ovf);
+    for (int d = 0; d < 3; ++d) mismatches += !(abr.min_factor(i, d) == f[d]);
+  }
+  CHECK(eligible > 10000);   // the test exercises both outcomes
+  CHECK(overflowing > 500);
+  CHECK(mismatches == 0);
+}

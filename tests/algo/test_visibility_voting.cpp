@@ -230,3 +230,91 @@ TEST_CASE("voting rejects bad masks naming the view, and more than 65535 views")
   CHECK_THROWS_AS(vote.add_view(A, &fg), vcar::Error);
   CHECK_NOTHROW(vote.add_view(A, nullptr));  // no evidence counts nothing
 }
+
+namespace {
+
+// Brute-force Eq. 1-2 counts over the views with a mask (the per-mean definition).
+void brute_counts(const vcar::GaussianScene& scene, const std::vector<Camera>& cams,
+                  const std::vector<const Mask*>& masks, std::vector<int>& V, std::vector<int>& F) {
+  V.assign(scene.size(), 0);
+  F.assign(scene.size(), 0);
+  for (std::size_t j = 0; j < cams.size(); ++j) {
+    if (!masks[j]) continue;
+    for (std::size_t i = 0; i < scene.size(); ++i) {
+      const Eigen::Vector3f t = cams[j].to_camera(scene.mu(i));
+      if (!(t.z() > 0)) continue;
+      const float u = cams[j].fx * t.x() / t.z() + cams[j].cx, v = cams[j].fy * t.y() / t.z() + cams[j].cy;
+      if (!vcar::inside_image(u, v, cams[j].width, cams[j].height)) continue;
+      ++V[i];
+      F[i] += vcar::mask_at(*masks[j], u, v);
+    }
+  }
+}
+
+// A disc mask (large uniform regions: the chunks of the voter are decided whole).
+Mask disc_mask(int W, int H, float cx, float cy, float r) {
+  Mask m(W, H, 1, 0);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) m(x, y) = (x + 0.5f - cx) * (x + 0.5f - cx) + (y + 0.5f - cy) * (y + 0.5f - cy) < r * r;
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("chunked voting (whole chunks decided per view) equals the per-mean brute force") {
+  // Many means in a small cube seen from a ring at 160 x 120 with disc masks: most chunks fall
+  // wholly inside a disc, outside it or outside the image, the rest straddle an edge.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> U(-0.6f, 0.6f);
+  std::vector<Eigen::Vector3f> mus(20000);
+  for (auto& m : mus) m = {U(rng), U(rng), U(rng)};
+  mus[17] = {NAN, 0, 0};  // a non-finite mean: never visible
+  const auto scene = scene_of(mus);
+  std::vector<Camera> cams;
+  std::vector<Mask> discs;
+  for (int j = 0; j < 12; ++j) {
+    const float a = 6.2831853f * j / 12;
+    const Eigen::Vector3f eye(1.6f * std::cos(a), 0.4f * std::sin(2.f * a), 1.6f * std::sin(a));  // some inside the cube's reach
+    cams.push_back(Camera::look_at(eye, Eigen::Vector3f(0.1f * j / 12, 0, 0), {0, -1, 0}, {160, 120, 110, 110, 80, 60},
+                                   "ring" + std::to_string(j)));
+    discs.push_back(disc_mask(160, 120, 70.f + 2 * j, 55.f, 25.f + 3 * j));
+  }
+  cams.push_back(Camera::look_at({0, 0, 0.3f}, {0, 0, 2}, {0, -1, 0}, {160, 120, 110, 110, 80, 60}, "inside"));  // straddles z = 0
+  discs.push_back(disc_mask(160, 120, 80, 60, 40));
+  std::vector<const Mask*> ptrs;
+  for (const Mask& m : discs) ptrs.push_back(&m);
+  std::vector<int> V, F;
+  brute_counts(scene, cams, ptrs, V, F);
+  for (int threads : {1, 2}) {
+    vcar::set_num_threads(threads);
+    vcar::VisibilityVoting vote(scene);
+    for (std::size_t j = 0; j < cams.size(); ++j) vote.add_view(cams[j], ptrs[j]);
+    int mismatches = 0;
+    for (std::size_t i = 0; i < scene.size(); ++i) mismatches += (vote.visible(i) != V[i]) + (vote.foreground(i) != F[i]);
+    INFO("threads " << threads);
+    CHECK(mismatches == 0);
+  }
+}
+
+TEST_CASE("remove_view takes a view's votes back: the counters equal a vote without it") {
+  std::mt19937 rng(5);
+  const auto scene = random_scene(5000, 9);
+  const auto cams = ring_cameras(7);
+  std::vector<Mask> masks;
+  for (const auto& c : cams) masks.push_back(random_mask(c.width, c.height, rng));
+  vcar::VisibilityVoting vote(scene);
+  for (std::size_t j = 0; j < cams.size(); ++j) vote.add_view(cams[j], &masks[j]);
+  vote.remove_view(cams[2], &masks[2]);
+  vote.remove_view(cams[5], &masks[5]);
+  vote.remove_view(cams[5], nullptr);  // no evidence: nothing taken back
+  CHECK(vote.views() == 5);
+  std::vector<const Mask*> kept;
+  for (std::size_t j = 0; j < cams.size(); ++j) kept.push_back(j == 2 || j == 5 ? nullptr : &masks[j]);
+  std::vector<int> V, F;
+  brute_counts(scene, cams, kept, V, F);
+  int mismatches = 0;
+  for (std::size_t i = 0; i < scene.size(); ++i) mismatches += (vote.visible(i) != V[i]) + (vote.foreground(i) != F[i]);
+  CHECK(mismatches == 0);
+  vcar::VisibilityVoting empty(scene);
+  CHECK_THROWS_AS(empty.remove_view(cams[0], &masks[0]), vcar::Error);
+}

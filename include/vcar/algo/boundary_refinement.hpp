@@ -33,10 +33,13 @@
 #include <Eigen/Core>
 
 #include "vcar/algo/boundary_distance.hpp"
+#include "vcar/algo/mean_projection.hpp"
 #include "vcar/core/camera.hpp"
 #include "vcar/core/error.hpp"
 #include "vcar/core/gaussian_scene.hpp"
 #include "vcar/core/image.hpp"
+#include "vcar/core/mask_tiles.hpp"
+#include "vcar/core/morton_order.hpp"
 #include "vcar/core/parallel.hpp"
 #include "vcar/core/projection.hpp"
 #include "vcar/core/rotation.hpp"
@@ -173,10 +176,12 @@ class BoundaryRefinement {
       if (candidates_[k] >= scene.size())
         throw Error("candidate " + std::to_string(candidates_[k]) + " out of range (scene has " +
                     std::to_string(scene.size()) + " Gaussians)", "BoundaryRefinement");
-    const std::vector<std::uint32_t> order = morton_order(scene);
+    const auto means = detail::candidate_means(scene, candidates_);
+    const std::vector<std::uint32_t> order = morton_order(means[0].data(), means[1].data(), means[2].data(), n);
     slot_.resize(n);
     for (auto& c : mu_) c.resize(n);
-    for (auto& c : q_) c.resize(n);
+    for (auto& c : rot_) c.resize(n);
+    for (auto& c : s_) c.resize(n);
     for (auto& c : log_s_) c.resize(n);
     for (auto& c : f_) c.assign(n, std::numeric_limits<float>::infinity());
     n_vis_.assign(n, 0);
@@ -184,8 +189,30 @@ class BoundaryRefinement {
     for (std::size_t j = 0; j < n; ++j) {  // internal slot j holds candidate order[j]
       const std::size_t i = candidates_[order[j]];
       slot_[order[j]] = static_cast<std::uint32_t>(j);
-      for (int d = 0; d < 3; ++d) { mu_[d][j] = scene.mean[d][i]; log_s_[d][j] = scene.log_scale[d][i]; }
-      for (int c = 0; c < 4; ++c) q_[c][j] = scene.rotation[c][i];
+      for (int d = 0; d < 3; ++d) {
+        mu_[d][j] = scene.mean[d][i];
+        log_s_[d][j] = scene.log_scale[d][i];
+        s_[d][j] = std::exp(log_s_[d][j]);
+      }
+      const Eigen::Matrix3f R = rotation_from_quaternion(scene.rotation[0][i], scene.rotation[1][i],
+                                                         scene.rotation[2][i], scene.rotation[3][i]);
+      for (int e = 0; e < 9; ++e) rot_[e][j] = R(e % 3, e / 3);
+    }
+    // Chunk boxes of the centres and the largest sum_d s_d^2 per chunk (the bound of add_view).
+    const std::size_t chunks = (n + kBox - 1) / kBox;
+    box_.resize(chunks);
+    for (std::size_t c = 0; c < chunks; ++c) {
+      std::array<float, 7> b{INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY, 0.f};
+      for (std::size_t j = c * kBox; j < std::min(n, (c + 1) * kBox); ++j) {
+        for (int d = 0; d < 3; ++d) {
+          if (!std::isfinite(mu_[d][j])) b[d] = NAN;  // the chunk is observed Gaussian by Gaussian
+          b[d] = std::min(b[d], mu_[d][j]);
+          b[3 + d] = std::max(b[3 + d], mu_[d][j]);
+        }
+        const float ss = s_[0][j] * s_[0][j] + s_[1][j] * s_[1][j] + s_[2][j] * s_[2][j];
+        b[6] = std::isfinite(ss) ? std::max(b[6], ss) : INFINITY;
+      }
+      box_[c] = b;
     }
   }
 
@@ -203,17 +230,36 @@ class BoundaryRefinement {
       throw Error("more than 65535 views for ABR", where);
     ++views_;
     const AbrParams p = params_;
-    parallel_chunks(static_cast<std::int64_t>(size()), kChunk, [&](std::int64_t, std::int64_t b, std::int64_t e) {
-      for (std::int64_t k = b; k < e; ++k) {
-        const Eigen::Vector3f mu(mu_[0][k], mu_[1][k], mu_[2][k]);
-        const Eigen::Matrix3f R = rotation_from_quaternion(q_[0][k], q_[1][k], q_[2][k], q_[3][k]);
-        const Eigen::Vector3f s(std::exp(log_s_[0][k]), std::exp(log_s_[1][k]), std::exp(log_s_[2][k]));
-        const AbrObservation obs = observe_gaussian(cam, mask, mu, R, s, p);
-        if (!obs.eligible) continue;
-        ++n_vis_[k];
-        if (!obs.overflow) continue;
-        ++n_ovf_[k];
-        for (int d = 0; d < 3; ++d) f_[d][k] = std::min(f_[d][k], obs.f[d]);  // multi-view min (B.3)
+    tiles_.build(mask);
+    const detail::MeanProjection P = detail::MeanProjection::from(cam);
+    parallel_chunks(static_cast<std::int64_t>(box_.size()), kChunk / kBox, [&](std::int64_t, std::int64_t b, std::int64_t e) {
+      for (std::int64_t c = b; c < e; ++c) {
+        const std::size_t j0 = static_cast<std::size_t>(c) * kBox, j1 = std::min(size(), j0 + kBox);
+        switch (chunk_content(P, cam, box_[c], p)) {
+          case MaskTiles::background: continue;  // no centre on foreground: none eligible (B.1)
+          case MaskTiles::foreground:            // every centre and endpoint on foreground
+            for (std::size_t k = j0; k < j1; ++k) ++n_vis_[k];
+            continue;
+          case MaskTiles::mixed: break;
+        }
+        for (std::size_t k = j0; k < j1; ++k) {
+          const Eigen::Vector3f mu(mu_[0][k], mu_[1][k], mu_[2][k]);
+          const float smax = std::max(s_[0][k], std::max(s_[1][k], s_[2][k]));
+          switch (gaussian_content(cam, mu, smax * smax, p)) {
+            case MaskTiles::background: continue;        // not eligible (B.1)
+            case MaskTiles::foreground: ++n_vis_[k]; continue;  // eligible, no endpoint outside
+            case MaskTiles::mixed: break;
+          }
+          Eigen::Matrix3f R;
+          for (int q = 0; q < 9; ++q) R(q % 3, q / 3) = rot_[q][k];
+          const Eigen::Vector3f s(s_[0][k], s_[1][k], s_[2][k]);
+          const AbrObservation obs = observe_gaussian(cam, mask, mu, R, s, p);
+          if (!obs.eligible) continue;
+          ++n_vis_[k];
+          if (!obs.overflow) continue;
+          ++n_ovf_[k];
+          for (int d = 0; d < 3; ++d) f_[d][k] = std::min(f_[d][k], obs.f[d]);  // multi-view min (B.3)
+        }
       }
     });
   }
@@ -253,50 +299,82 @@ class BoundaryRefinement {
 
   // Bytes of state held per candidate (index, geometry copy, counters, running minima).
   static constexpr std::size_t bytes_per_candidate() {
-    return 2 * sizeof(std::uint32_t) + (3 + 4 + 3) * sizeof(float) + 2 * sizeof(std::uint16_t) + 3 * sizeof(float);
+    return 2 * sizeof(std::uint32_t) + (3 + 9 + 3 + 3) * sizeof(float) + 2 * sizeof(std::uint16_t) + 3 * sizeof(float);
   }
 
  private:
-  // Candidate positions sorted by the Morton code of their means (10 bits per axis over the
-  // candidates' bounding box), ties by position: deterministic.
-  std::vector<std::uint32_t> morton_order(const GaussianScene& scene) const {
-    const std::size_t n = candidates_.size();
-    std::array<float, 3> lo{}, hi{};
-    for (int d = 0; d < 3; ++d) { lo[d] = std::numeric_limits<float>::max(); hi[d] = -lo[d]; }
-    for (std::size_t k = 0; k < n; ++k)
-      for (int d = 0; d < 3; ++d) {
-        lo[d] = std::min(lo[d], scene.mean[d][candidates_[k]]);
-        hi[d] = std::max(hi[d], scene.mean[d][candidates_[k]]);
-      }
-    auto spread = [](std::uint64_t v) {  // 10 bits -> every third bit
-      v = (v | (v << 16)) & 0x030000FFull;
-      v = (v | (v << 8)) & 0x0300F00Full;
-      v = (v | (v << 4)) & 0x030C30C3ull;
-      v = (v | (v << 2)) & 0x09249249ull;
-      return v;
-    };
-    std::vector<std::uint64_t> key(n);
-    for (std::size_t k = 0; k < n; ++k) {
-      std::uint64_t code = 0;
-      for (int d = 0; d < 3; ++d) {
-        const float ext = hi[d] - lo[d];
-        const float x = ext > 0.f ? (scene.mean[d][candidates_[k]] - lo[d]) / ext : 0.f;
-        code |= spread(static_cast<std::uint64_t>(std::min(1023.f, std::max(0.f, x * 1024.f)))) << d;
-      }
-      key[k] = (code << 32) | k;  // positions < 2^32 (Index is 32-bit)
+  // What one view says about a whole chunk of centres (a Morton run of kBox slots): background
+  // when no centre can land on foreground (none eligible, B.1); foreground when every centre and
+  // every 3-sigma endpoint lands on foreground inside the image (all eligible, none overflows:
+  // Eq. 9's endpoints lie within sigma_c sqrt(lambda_1) of the centre, and by Eq. 10 lambda_1 <=
+  // ||J||^2 sum_d s_d^2 + eps2d); mixed otherwise (observed Gaussian by Gaussian).
+  MaskTiles::Content chunk_content(const detail::MeanProjection& P, const Camera& cam, const std::array<float, 7>& b,
+                                   const AbrParams& p) const {
+    const detail::BoxView v = detail::project_box(P, b.data(), b.data() + 3);
+    if (v.visibility == detail::BoxView::none_visible) return MaskTiles::background;
+    const MaskTiles::Content centres = tiles_.classify(v.x0, v.y0, v.x1, v.y1);
+    if (centres == MaskTiles::background) return MaskTiles::background;
+    if (v.visibility != detail::BoxView::all_visible || !(p.projection.eps2d > 0.f)) return MaskTiles::mixed;
+    // Nearest camera depth over the box (affine in the point: at a corner), with margin.
+    float zmin = INFINITY, tmax = 0.f;  // nearest depth, bound of ||J||^2 (z / f)^2
+    for (int c = 0; c < 8; ++c) {
+      const float q[3] = {(c & 1) ? b[3] : b[0], (c & 2) ? b[4] : b[1], (c & 4) ? b[5] : b[2]};
+      const Eigen::Vector3f t = cam.to_camera(Eigen::Vector3f(q[0], q[1], q[2]));
+      zmin = std::min(zmin, t.z());
     }
-    std::sort(key.begin(), key.end());
-    std::vector<std::uint32_t> order(n);
-    for (std::size_t j = 0; j < n; ++j) order[j] = static_cast<std::uint32_t>(key[j] & 0xFFFFFFFFull);
-    return order;
+    zmin *= 0.999f;
+    if (!(zmin >= p.projection.near_plane * 1.001f) || !(zmin < p.projection.far_plane * 0.999f)) return MaskTiles::mixed;
+    // ||J||^2 <= ||J||_F^2 <= (f / z)^2 (2 + (tx/z)^2 + (ty/z)^2), |tx/z|, |ty/z| clamped to the frustum limits.
+    const float W = static_cast<float>(cam.width), H = static_cast<float>(cam.height);
+    const float lx = std::max(W - cam.cx, cam.cx) / cam.fx + p.projection.frustum_margin * 0.5f * W / cam.fx;
+    const float ly = std::max(H - cam.cy, cam.cy) / cam.fy + p.projection.frustum_margin * 0.5f * H / cam.fy;
+    tmax = 2.f + lx * lx + ly * ly;
+    const float f = std::max(cam.fx, cam.fy) / zmin;
+    const float lambda1 = f * f * tmax * b[6] + p.projection.eps2d;
+    const float reach = p.sigma_c * std::sqrt(lambda1) * 1.001f + 1.f;  // px, with margin
+    if (!(reach < 1e6f)) return MaskTiles::mixed;
+    const int r = static_cast<int>(std::ceil(reach));
+    if (v.x0 - r < 0 || v.y0 - r < 0 || v.x1 + r >= cam.width || v.y1 + r >= cam.height) return MaskTiles::mixed;
+    return tiles_.classify(v.x0 - r, v.y0 - r, v.x1 + r, v.y1 + r) == MaskTiles::foreground ? MaskTiles::foreground
+                                                                                            : MaskTiles::mixed;
   }
 
+  // The same decision for one Gaussian (largest squared scale s2max): background when its
+  // centre is not eligible (B.1, the test observe_gaussian starts with); foreground when every
+  // pixel within sigma_c sqrt(lambda_1) of the centre is foreground inside the image, with
+  // lambda_1 <= ||J||^2 s2max + eps2d (Eq. 10: J R_w Sigma R_w^T J^T + eps2d I); else mixed.
+  MaskTiles::Content gaussian_content(const Camera& cam, const Eigen::Vector3f& mu, float s2max,
+                                      const AbrParams& p) const {
+    const Eigen::Vector3f t = cam.to_camera(mu);
+    if (!(t.z() >= p.projection.near_plane && t.z() <= p.projection.far_plane)) return MaskTiles::background;
+    const float u = cam.fx * t.x() / t.z() + cam.cx, v = cam.fy * t.y() / t.z() + cam.cy;
+    if (!(u >= 0.f && v >= 0.f && u < static_cast<float>(cam.width) && v < static_cast<float>(cam.height)))
+      return MaskTiles::background;  // mask_at is 0 outside the image
+    const int px = static_cast<int>(u), py = static_cast<int>(v);
+    if (!(p.projection.eps2d > 0.f) || !(s2max < 1e30f)) return MaskTiles::mixed;
+    // ||J||^2 = largest eigenvalue of J J^T (J of perspective_jacobian, clamped tx/z, ty/z).
+    const Eigen::Matrix<float, 2, 3> J = perspective_jacobian(cam, t, p.projection.frustum_margin);
+    const Eigen::Matrix2f JJ = J * J.transpose();
+    const float mean = 0.5f * (JJ(0, 0) + JJ(1, 1)), diff = 0.5f * (JJ(0, 0) - JJ(1, 1));
+    const float jmax = mean + std::sqrt(diff * diff + JJ(0, 1) * JJ(0, 1));
+    const float reach = p.sigma_c * std::sqrt(jmax * s2max + p.projection.eps2d) * 1.001f + 1.f;
+    if (!(reach < 1e6f)) return MaskTiles::mixed;
+    const int r = static_cast<int>(std::ceil(reach));
+    if (px - r < 0 || py - r < 0 || px + r >= cam.width || py + r >= cam.height) return MaskTiles::mixed;
+    return tiles_.classify(px - r, py - r, px + r, py + r) == MaskTiles::foreground ? MaskTiles::foreground
+                                                                                    : MaskTiles::mixed;
+  }
+
+  static constexpr std::size_t kBox = 64;  // slots per chunk box
   static constexpr std::int64_t kChunk = 2048;
   std::vector<Index> candidates_;
   std::vector<std::uint32_t> slot_;          // internal slot of candidate position k
   AbrParams params_;
   std::array<std::vector<float>, 3> mu_;     // candidate means
-  std::array<std::vector<float>, 4> q_;      // candidate quaternions (w, x, y, z)
+  std::array<std::vector<float>, 9> rot_;    // candidate rotation matrices, column-major
+  std::array<std::vector<float>, 3> s_;      // candidate scales exp(log s)
+  std::vector<std::array<float, 7>> box_;    // per kBox slots: centre box lo, hi, max sum_d s_d^2
+  MaskTiles tiles_;                          // the current view's mask in tiles
   LogScales log_s_;                          // candidate log-scales before refinement (by slot)
   std::array<std::vector<float>, 3> f_;      // running minimum candidate factor per axis
   std::vector<std::uint16_t> n_vis_, n_ovf_;  // B.3 counts

@@ -1,7 +1,9 @@
 #pragma once
 // Eq. 1 for a SIMD batch of Gaussian means (SoA x, y, z): the one projection that voting and
 // the valid-camera filter (A.1) share, so both apply exactly the same visibility test.
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -91,6 +93,65 @@ inline void project_tail(const MeanProjection& w, const float* x, const float* y
   }
   project_batch(w, px, py, pz, pix, vis, depth);
   for (std::size_t l = m; l < mean_batch; ++l) { vis[l] = 0; pix[l] = 0; }
+}
+
+}  // namespace vcar::detail
+
+namespace vcar::detail {
+
+// Eq. 1 for a whole box of means at once. The camera depth is affine in the point and the
+// projection of a box in front of the camera lies in the 2D bounding box of its 8 projected
+// corners, so one view can decide a whole run of means (a Morton-ordered chunk) when the box
+// is clearly on one side of every test; a margin far above float rounding keeps the decision
+// equal to the per-mean test of project().
+struct BoxView {
+  enum Case : std::uint8_t { none_visible, all_visible, partial };
+  Case visibility = partial;
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // pixel rectangle holding every visible projected mean
+};
+
+inline BoxView project_box(const MeanProjection& w, const float lo[3], const float hi[3]) {
+  BoxView out;
+  out.x1 = w.width - 1;  // until known: the whole image
+  out.y1 = w.height - 1;
+  float t[8][3];
+  float scale = 0;  // magnitude of the terms of t = R mu + t_w (rounding is relative to it)
+  for (int r = 0; r < 3; ++r) {
+    float s = std::abs(w.t[r]);
+    for (int k = 0; k < 3; ++k) s += std::abs(w.R[3 * r + k]) * std::max(std::abs(lo[k]), std::abs(hi[k]));
+    scale = std::max(scale, s);
+  }
+  for (int k = 0; k < 3; ++k)
+    if (!std::isfinite(lo[k]) || !std::isfinite(hi[k])) return out;  // non-finite box: per-mean test
+  if (!(scale < 1e30f)) return out;
+  float zmin = INFINITY, zmax = -INFINITY;
+  for (int c = 0; c < 8; ++c) {
+    const float p[3] = {(c & 1) ? hi[0] : lo[0], (c & 2) ? hi[1] : lo[1], (c & 4) ? hi[2] : lo[2]};
+    for (int r = 0; r < 3; ++r) t[c][r] = w.R[3 * r] * p[0] + w.R[3 * r + 1] * p[1] + w.R[3 * r + 2] * p[2] + w.t[r];
+    zmin = std::min(zmin, t[c][2]);
+    zmax = std::max(zmax, t[c][2]);
+  }
+  const float dz = 1e-5f * scale;
+  if (zmax < -dz) { out.visibility = BoxView::none_visible; return out; }  // every z < 0
+  if (!(zmin > dz)) return out;                                            // straddles z = 0
+  float umin = INFINITY, umax = -INFINITY, vmin = INFINITY, vmax = -INFINITY;
+  for (int c = 0; c < 8; ++c) {
+    const float u = w.fx * t[c][0] / t[c][2] + w.cx, v = w.fy * t[c][1] / t[c][2] + w.cy;
+    umin = std::min(umin, u); umax = std::max(umax, u);
+    vmin = std::min(vmin, v); vmax = std::max(vmax, v);
+  }
+  // Rounding of u = fx x / z + cx per mean: well below this margin (pixels).
+  const float m = 0.5f + 1e-5f * ((w.fx + w.fy) * scale / zmin + std::max(std::abs(umin), std::abs(umax)) +
+                                  std::max(std::abs(vmin), std::abs(vmax)));
+  umin -= m; umax += m; vmin -= m; vmax += m;
+  const float W = static_cast<float>(w.width), H = static_cast<float>(w.height);
+  if (umax < 0.f || vmax < 0.f || umin >= W || vmin >= H) { out.visibility = BoxView::none_visible; return out; }
+  out.x0 = static_cast<int>(std::floor(std::max(umin, 0.f)));
+  out.y0 = static_cast<int>(std::floor(std::max(vmin, 0.f)));
+  out.x1 = static_cast<int>(std::floor(std::min(umax, W - 1.f)));
+  out.y1 = static_cast<int>(std::floor(std::min(vmax, H - 1.f)));
+  if (umin >= 0.f && vmin >= 0.f && umax < W && vmax < H) out.visibility = BoxView::all_visible;
+  return out;
 }
 
 }  // namespace vcar::detail

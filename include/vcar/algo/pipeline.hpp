@@ -243,6 +243,55 @@ inline const Mask* usable(const Mask* m, const VcarParams& params) {
   return static_cast<double>(fg) > params.min_mask_fraction * static_cast<double>(m->pixels()) ? m : nullptr;
 }
 
+// Sphere (Eq. 4-5) and view completeness (Eq. 6, A.1-A.2) of the selection `selected`, into
+// diag (sphere, valid cameras, gap, timing "vca").
+inline AngularGap assess_completeness(const GaussianScene& scene, const std::vector<Index>& selected,
+                                      const std::vector<Camera>& train_cameras, std::size_t ref,
+                                      const VcarParams& params, Diagnostics& diag) {
+  const auto tv = Clock::now();
+  diag.sphere = robust_sphere(scene, selected, train_cameras[ref].position(), params.eta);
+  const auto valid = valid_cameras(scene, selected, train_cameras, params.rho_min);
+  diag.valid_cameras = valid.size();
+  std::vector<Eigen::Vector3f> positions;
+  for (std::size_t j : valid) positions.push_back(train_cameras[j].position());
+  const AngularGap gap = max_angular_gap(fibonacci_lattice(params.K), headings(diag.sphere.c, positions));
+  diag.max_gap_deg = gap.Delta_max_deg;
+  diag.gap_direction = gap.direction;
+  diag.timings_s.emplace_back("vca", seconds_since(tv));
+  return gap;
+}
+
+// ABR (Eq. 9-14, B) of `selected` on the training views that have a mask in `train_masks`
+// (run-length encoded, indexed like train_cameras): the refined log-scales, aligned with
+// `selected` (the scene's own when ABR is off). Fills diag's ABR counts, mask bytes and timing.
+inline LogScales refine_boundaries(const GaussianScene& scene, const std::vector<Index>& selected,
+                                   const std::vector<Camera>& train_cameras,
+                                   const std::vector<std::optional<RleMask>>& train_masks, const VcarParams& params,
+                                   Diagnostics& diag) {
+  if (!params.enable_abr) {
+    LogScales out{std::vector<float>(selected.size()), std::vector<float>(selected.size()),
+                  std::vector<float>(selected.size())};
+    for (std::size_t k = 0; k < selected.size(); ++k)
+      for (int d = 0; d < 3; ++d) out[d][k] = scene.log_scale[d][selected[k]];
+    return out;
+  }
+  const auto ta = Clock::now();
+  BoundaryRefinement abr(scene, selected, params.abr());
+  Mask scratch;
+  diag.mask_store_bytes = 0;
+  for (std::size_t j = 0; j < train_masks.size(); ++j) {
+    if (!train_masks[j]) continue;
+    diag.mask_store_bytes += train_masks[j]->bytes();
+    train_masks[j]->decode(scratch);
+    abr.add_view(train_cameras[j], scratch);
+  }
+  AbrResult a = abr.finish();
+  diag.abr_flagged = a.flagged;
+  diag.abr_compressed = a.compressed;
+  diag.timings_s.emplace_back("abr", seconds_since(ta));
+  return std::move(a.log_scale);
+}
+
 // Stages 2 and 3 of vcar::segment from the coarse selection `selected` (scores: its R_i):
 // sphere (Eq. 4-5), view completeness (Eq. 6), SSS and the fine round (Eq. 7-8), ABR (Eq. 9-14).
 // `train_masks` holds the coarse round's training masks (indexed by training view) for ABR and
@@ -278,16 +327,7 @@ bool refine(const GaussianScene& scene, const std::vector<Camera>& train_cameras
   AngularGap gap;
   if (params.enable_sss) {
     stage("view_completeness");
-    auto tv = Clock::now();
-    diag.sphere = robust_sphere(scene, selected, train_cameras[ref].position(), params.eta);
-    const auto valid = valid_cameras(scene, selected, train_cameras, params.rho_min);
-    diag.valid_cameras = valid.size();
-    std::vector<Eigen::Vector3f> positions;
-    for (std::size_t j : valid) positions.push_back(train_cameras[j].position());
-    gap = max_angular_gap(fibonacci_lattice(params.K), headings(diag.sphere.c, positions));
-    diag.max_gap_deg = gap.Delta_max_deg;
-    diag.gap_direction = gap.direction;
-    timing("vca", seconds_since(tv));
+    gap = assess_completeness(scene, selected, train_cameras, ref, params, diag);
   }
 
   diag.sss_triggered = params.enable_sss && (params.force_sss || gap.Delta_max_deg > params.Delta_th_deg);
@@ -334,27 +374,8 @@ bool refine(const GaussianScene& scene, const std::vector<Camera>& train_cameras
   }
 
   // ---- Stage 3: ABR on the training views with masks from the latest round (Eq. 9-14, B).
-  result.log_scale = {std::vector<float>(selected.size()), std::vector<float>(selected.size()),
-                      std::vector<float>(selected.size())};
-  for (std::size_t k = 0; k < selected.size(); ++k)
-    for (int d = 0; d < 3; ++d) result.log_scale[d][k] = scene.log_scale[d][selected[k]];
-  if (params.enable_abr) {
-    stage("abr");
-    auto ta = Clock::now();
-    BoundaryRefinement abr(scene, selected, params.abr());
-    Mask scratch;
-    for (std::size_t j = 0; j < M; ++j) {
-      if (!train_masks[j]) continue;
-      diag.mask_store_bytes += train_masks[j]->bytes();
-      train_masks[j]->decode(scratch);
-      abr.add_view(train_cameras[j], scratch);
-    }
-    AbrResult a = abr.finish();
-    result.log_scale = std::move(a.log_scale);
-    diag.abr_flagged = a.flagged;
-    diag.abr_compressed = a.compressed;
-    timing("abr", seconds_since(ta));
-  }
+  if (params.enable_abr) stage("abr");
+  result.log_scale = refine_boundaries(scene, selected, train_cameras, train_masks, params, diag);
   result.indices = std::move(selected);
   result.scores = std::move(scores);
   diag.n_final = result.indices.size();

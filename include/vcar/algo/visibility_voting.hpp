@@ -6,10 +6,14 @@
 // 2 more per extra object in MultiObjectVoting), whatever the number of views.
 // R_i = F_i / max(V_i, 1) (Eq. 3). A view without a mask is "no evidence" (conventions §4).
 //
-// Views are queued (camera + the mask packed to 1 bit per pixel, W H / 8 bytes) and voted in
-// blocks of a few views per pass over the candidates, so the means are read once per block
-// and the packed masks stay in cache. Queries flush the queue. Each candidate is written by
-// one thread only: results are identical for any thread count. Not thread-safe to share.
+// Views are queued (camera + the mask packed to 1 bit per pixel, W H / 8 bytes, and summarised
+// in 8 x 8 tiles) and voted in blocks of a few views per pass over the candidates, so the means
+// are read once per block and the packed masks stay in cache. The candidates are voted in
+// Morton-ordered chunks: a view decides a whole chunk at once where the chunk's box projects
+// clearly outside the image, or clearly inside it onto mask tiles that are all background or all
+// foreground; the rest is voted mean by mean. The counts are exactly Eq. 1-2's either way.
+// Queries flush the queue. Each candidate is written by one thread only: results are identical
+// for any thread count. Not thread-safe to share.
 //
 // Beyond the paper (off by default), occlusion-aware visibility: with a rendered expected
 // depth D = sum z alpha T and alpha A of the same view, a Gaussian visible by Eq. 1 at pixel p
@@ -18,8 +22,10 @@
 #include <array>
 #include <bit>
 #include <cassert>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <span>
 #include <string>
 #include <utility>
@@ -30,6 +36,8 @@
 #include "vcar/core/error.hpp"
 #include "vcar/core/gaussian_scene.hpp"
 #include "vcar/core/image.hpp"
+#include "vcar/core/mask_tiles.hpp"
+#include "vcar/core/morton_order.hpp"
 #include "vcar/core/parallel.hpp"
 
 namespace vcar {
@@ -37,7 +45,7 @@ namespace vcar {
 namespace detail {
 
 // Nonzero bytes of `m` to bits, bit p = row * W + col, LSB first (little-endian: bit p is also
-// bit p % 32 of 32-bit word p / 32, which the gather in vote_range reads).
+// bit p % 32 of 32-bit word p / 32, which the gather in vote_chunks reads).
 inline void pack_mask_bits(const Mask& m, std::uint8_t* bits) {
   const std::size_t n = m.pixels(), full = n / 8;
   const std::uint8_t* src = m.data.data();
@@ -60,12 +68,16 @@ static_assert(std::endian::native == std::endian::little, "packed masks are read
 
 inline bool bit_at(const std::uint8_t* bits, std::int32_t p) { return (bits[p >> 3] >> (p & 7)) & 1; }
 
-// One queued view: the projection and where its objects' packed masks start.
+
+// One queued view: the projection, where its objects' packed masks and tile summaries are, and
+// whether it adds (+1) or takes back (-1) its votes.
 struct VoteView {
   MeanProjection P;
   std::size_t bits_offset = 0;      // object k's bits at bits_offset + k * bytes_per_mask
   std::size_t bytes_per_mask = 0;
-  const float* depth = nullptr;     // occlusion-aware only (never queued)
+  std::size_t tiles_offset = 0;     // object k's MaskTiles at tiles_offset + k
+  int sign = 1;
+  const float* depth = nullptr;     // occlusion-aware only (voted alone)
   const float* alpha = nullptr;
   float tolerance = 0.f;
 
@@ -77,106 +89,151 @@ struct VoteView {
   }
 };
 
-// Votes candidates [begin, end) in every queued view. fg has n_objects rows of stride `n`.
-inline void vote_range_general(const float* x, const float* y, const float* z, std::size_t begin, std::size_t end,
-                               std::span<const VoteView> views, const std::uint8_t* bits, int n_objects,
-                               std::uint16_t* visible, std::uint16_t* fg, std::size_t n) {
-  constexpr std::size_t L = mean_batch;
-  alignas(64) std::int32_t pix[L], vis[L];
-  alignas(64) float depth[L];
-  for (const VoteView& w : views) {
-    const std::uint8_t* wb = bits + w.bits_offset;
-    for (std::size_t i0 = begin; i0 < end; i0 += L) {
-      const std::size_t m = std::min(L, end - i0);
-      if (m == L) project_batch(w.P, x + i0, y + i0, z + i0, pix, vis, depth);
-      else project_tail(w.P, x + i0, y + i0, z + i0, m, pix, vis, depth);
-      if (w.depth) {  // occlusion-aware rule (see top of file)
-        for (std::size_t l = 0; l < m; ++l) {
-          const float a = w.alpha[pix[l]];
-          if (vis[l] && a >= 0.5f && !(depth[l] <= w.depth[pix[l]] / a * (1.f + w.tolerance))) vis[l] = 0;
-        }
-      }
-      for (std::size_t l = 0; l < m; ++l) {
-        const std::size_t i = i0 + l;
-        const auto s = static_cast<std::uint16_t>(vis[l]);
-        visible[i] = static_cast<std::uint16_t>(visible[i] + s);
-        for (int k = 0; k < n_objects; ++k) {
-          const std::uint8_t* kb = wb + static_cast<std::size_t>(k) * w.bytes_per_mask;
-          fg[k * n + i] = static_cast<std::uint16_t>(fg[k * n + i] + (s & bit_at(kb, pix[l])));
-        }
-      }
-    }
-  }
-}
+// Means sorted along a Morton curve and cut into chunks of `chunk_size` with their bounding
+// boxes: one view decides a whole chunk when its box is clearly invisible, or clearly visible
+// over uniform mask tiles (project_box, MaskTiles); only the other chunks are voted mean by mean.
+struct ChunkedMeans {
+  static constexpr std::size_t chunk_size = 256;  // a multiple of mean_batch
+  std::vector<std::uint32_t> order;   // sorted position j -> candidate position
+  std::array<std::vector<float>, 3> xyz;  // sorted means, padded with NaN to whole chunks
+  std::vector<std::array<float, 6>> box;  // per chunk: lo x, y, z, hi x, y, z
 
-// The hot path (no occlusion test, whole batches): for a slice of candidates, counts over the
-// queued views in 32-bit arrays (SIMD adds, in L1), added to the uint16 counters once. One
-// projection per (Gaussian, view) serves every object.
-inline void vote_range(const float* x, const float* y, const float* z, std::size_t begin, std::size_t end,
-                       std::span<const VoteView> views, const std::uint8_t* bits, int n_objects,
-                       std::uint16_t* visible, std::uint16_t* fg, std::size_t n) {
-  constexpr std::size_t L = mean_batch, S = 512;  // slice of candidates
-  if (std::any_of(views.begin(), views.end(), [](const VoteView& w) { return w.depth != nullptr; }))
-    return vote_range_general(x, y, z, begin, end, views, bits, n_objects, visible, fg, n);
-  using BI = simd::batch<std::int32_t>;
-  const std::size_t K = static_cast<std::size_t>(n_objects);
-  std::vector<std::int32_t> acc((1 + K) * S);  // per call (a chunk of candidates), not per Gaussian
-  std::int32_t* accV = acc.data();
-  const std::size_t full_end = begin + (end - begin) / L * L;
-  for (std::size_t s0 = begin; s0 < full_end; s0 += S) {
-    const std::size_t s1 = std::min(full_end, s0 + S);
-    std::fill(acc.begin(), acc.end(), 0);
-    for (const VoteView& w : views) {
-      for (std::size_t i0 = s0; i0 < s1; i0 += L) {
-        const ProjectedBatch p = project(w.P, x + i0, y + i0, z + i0);
-        std::int32_t* av = accV + (i0 - s0);
-        (BI::load_unaligned(av) + p.vis).store_unaligned(av);
-        const BI word_index = p.pix >> 5, shift = p.pix & BI(31);  // bit p is bit p % 32 of word p / 32
-        for (std::size_t k = 0; k < K; ++k) {
-          const auto* words = reinterpret_cast<const std::int32_t*>(bits + w.bits_offset + k * w.bytes_per_mask);
-          const BI f = (simd::gather(words, word_index) >> shift) & p.vis;
-          std::int32_t* af = accV + (1 + k) * S + (i0 - s0);
-          (BI::load_unaligned(af) + f).store_unaligned(af);
-        }
-      }
+  static_assert(chunk_size % mean_batch == 0);
+  ChunkedMeans() = default;
+  ChunkedMeans(const float* x, const float* y, const float* z, std::size_t n) {
+    order = morton_order(x, y, z, n);
+    const std::size_t chunks = (n + chunk_size - 1) / chunk_size, padded = chunks * chunk_size;
+    const float* src[3] = {x, y, z};
+    for (int d = 0; d < 3; ++d) {
+      xyz[d].assign(padded, std::numeric_limits<float>::quiet_NaN());
+      for (std::size_t j = 0; j < n; ++j) xyz[d][j] = src[d][order[j]];
     }
-    for (std::size_t i = 0; i < s1 - s0; ++i) {
-      visible[s0 + i] = static_cast<std::uint16_t>(visible[s0 + i] + accV[i]);
-      for (std::size_t k = 0; k < K; ++k)
-        fg[k * n + s0 + i] = static_cast<std::uint16_t>(fg[k * n + s0 + i] + accV[(1 + k) * S + i]);
+    box.resize(chunks);
+    for (std::size_t c = 0; c < chunks; ++c) {
+      std::array<float, 6> b{INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
+      for (std::size_t j = c * chunk_size; j < std::min(n, (c + 1) * chunk_size); ++j)
+        for (int d = 0; d < 3; ++d) {
+          if (!std::isfinite(xyz[d][j])) b[d] = NAN;  // a non-finite mean: the chunk is voted per mean
+          b[d] = std::min(b[d], xyz[d][j]);
+          b[3 + d] = std::max(b[3 + d], xyz[d][j]);
+        }
+      box[c] = b;
     }
   }
-  if (full_end < end) vote_range_general(x, y, z, full_end, end, views, bits, n_objects, visible, fg, n);
+  std::size_t chunks() const { return box.size(); }
+};
+
+// Votes chunks [c0, c1) in every queued view. Counters are by sorted position; fg has
+// n_objects rows of stride `n`. Per chunk, counts over the queued views are summed in 32-bit
+// arrays (SIMD adds, in L1) plus per-chunk constants, and added to the uint16 counters once.
+inline void vote_chunks(const ChunkedMeans& cm, std::size_t c0, std::size_t c1, std::span<const VoteView> views,
+                        const std::uint8_t* bits, const MaskTiles* tiles, int n_objects, std::uint16_t* visible,
+                        std::uint16_t* fg, std::size_t n) {
+  using BI = simd::batch<std::int32_t>;
+  constexpr std::size_t L = mean_batch, C = ChunkedMeans::chunk_size;
+  constexpr std::size_t max_objects = 64;
+  const std::size_t K = static_cast<std::size_t>(n_objects);
+  alignas(64) std::int32_t acc[(1 + 4) * C];  // visible + up to 4 objects in one pass
+  std::int32_t add[1 + max_objects];
+  MaskTiles::Content content[max_objects];
+  const float* x = cm.xyz[0].data();
+  const float* y = cm.xyz[1].data();
+  const float* z = cm.xyz[2].data();
+  for (std::size_t o0 = 0; o0 < K; o0 += 4) {  // objects in groups of 4 (acc stays in L1)
+    const std::size_t k1 = std::min(K, o0 + 4);
+    for (std::size_t c = c0; c < c1; ++c) {
+      const std::size_t j0 = c * C;
+      std::fill(acc, acc + (1 + k1 - o0) * C, 0);
+      std::fill(add, add + 1 + K, 0);
+      const float* lo = cm.box[c].data();
+      for (const VoteView& w : views) {
+        const BoxView b = project_box(w.P, lo, lo + 3);
+        if (b.visibility == BoxView::none_visible) continue;
+        bool uniform = b.visibility == BoxView::all_visible && !w.depth;
+        for (std::size_t k = o0; k < k1; ++k) {
+          content[k] = tiles[w.tiles_offset + k].classify(b.x0, b.y0, b.x1, b.y1);
+          uniform = uniform && content[k] != MaskTiles::mixed;
+        }
+        if (uniform) {  // every mean of the chunk visible, each object's mask constant over them
+          add[0] += w.sign;
+          for (std::size_t k = o0; k < k1; ++k) add[1 + k] += content[k] == MaskTiles::foreground ? w.sign : 0;
+          continue;
+        }
+        const BI sign(w.sign);
+        alignas(64) std::int32_t pix_l[L], vis_l[L];
+        for (std::size_t i0 = j0; i0 < j0 + C; i0 += L) {
+          ProjectedBatch p = project(w.P, x + i0, y + i0, z + i0);
+          if (w.depth) {  // occlusion-aware rule (see top of file)
+            alignas(64) float depth_l[L];
+            p.pix.store_aligned(pix_l);
+            p.vis.store_aligned(vis_l);
+            p.z.store_aligned(depth_l);
+            for (std::size_t l = 0; l < L; ++l) {
+              const float a = w.alpha[pix_l[l]];
+              if (vis_l[l] && a >= 0.5f && !(depth_l[l] <= w.depth[pix_l[l]] / a * (1.f + w.tolerance))) vis_l[l] = 0;
+            }
+            p.vis = BI::load_aligned(vis_l);
+          }
+          const BI sv = p.vis * sign;
+          std::int32_t* av = acc + (i0 - j0);
+          (BI::load_aligned(av) + sv).store_aligned(av);
+          const BI word_index = p.pix >> 5, shift = p.pix & BI(31);  // bit p is bit p % 32 of word p / 32
+          for (std::size_t k = o0; k < k1; ++k) {
+            if (content[k] == MaskTiles::background) continue;
+            std::int32_t* af = acc + (1 + k - o0) * C + (i0 - j0);
+            if (content[k] == MaskTiles::foreground) {
+              (BI::load_aligned(af) + sv).store_aligned(af);
+              continue;
+            }
+            const auto* words = reinterpret_cast<const std::int32_t*>(bits + w.bits_offset + k * w.bytes_per_mask);
+            const BI f = ((simd::gather(words, word_index) >> shift) & BI(1)) * sv;
+            (BI::load_aligned(af) + f).store_aligned(af);
+          }
+        }
+      }
+      const std::size_t j1 = std::min(n, j0 + C);
+      for (std::size_t j = j0; j < j1; ++j) {
+        if (o0 == 0) visible[j] = static_cast<std::uint16_t>(visible[j] + acc[j - j0] + add[0]);
+        for (std::size_t k = o0; k < k1; ++k)
+          fg[k * n + j] = static_cast<std::uint16_t>(fg[k * n + j] + acc[(1 + k - o0) * C + j - j0] + add[1 + k]);
+      }
+    }
+  }
 }
 
 }  // namespace detail
 
 // K objects voted in one pass over the views: one projection per (Gaussian, view), one visible
 // counter and K foreground counters per Gaussian. VisibilityVoting is the K = 1 case.
+//
+// Candidates are kept in Morton order with their means copied (12 bytes per candidate, plus 4
+// for the order) so that whole chunks of them are decided per view from their bounding box and
+// the masks' tile summaries (detail::vote_chunks); the counters are exactly those of Eq. 1-2
+// voted mean by mean. A view's votes can be taken back (remove_view) for incremental
+// re-selection: the counters are sums over views.
 class MultiObjectVoting {
 public:
   static constexpr std::size_t max_views = 65535;  // uint16_t counters
+  static constexpr int max_objects = 64;
   std::size_t block_views = 8;                     // views voted per pass over the candidates
   std::size_t chunk = 2048;                        // candidates per parallel task (fixed)
 
-  // Every Gaussian of `scene` is a candidate; the scene's mean columns are referenced, so the
-  // scene must outlive this object.
+  // Every Gaussian of `scene` is a candidate (its means are copied).
   MultiObjectVoting(const GaussianScene& scene, int n_objects)
       : MultiObjectVoting(std::span<const float>(scene.mean[0]), std::span<const float>(scene.mean[1]),
                           std::span<const float>(scene.mean[2]), n_objects) {}
-  // The Gaussians `candidates` of `scene` (scene indices, any order); their means are copied.
+  // The Gaussians `candidates` of `scene` (scene indices, any order).
   MultiObjectVoting(const GaussianScene& scene, std::vector<Index> candidates, int n_objects)
       : candidates_(std::move(candidates)) {
-    own_ = detail::candidate_means(scene, candidates_);
-    init(own_[0].data(), own_[1].data(), own_[2].data(), candidates_.size(), n_objects);
+    const auto own = detail::candidate_means(scene, candidates_);
+    init(own[0].data(), own[1].data(), own[2].data(), candidates_.size(), n_objects);
   }
-  // Raw SoA means (referenced, not copied); candidate k has scene index k.
+  // Raw SoA means (copied); candidate k has scene index k.
   MultiObjectVoting(std::span<const float> x, std::span<const float> y, std::span<const float> z, int n_objects) {
     if (x.size() != y.size() || x.size() != z.size()) throw Error("mean columns differ in length", "voting");
     init(x.data(), y.data(), z.data(), x.size(), n_objects);
   }
 
-  // Not copyable (a subset's means are referenced by pointer); movable.
   MultiObjectVoting(const MultiObjectVoting&) = delete;
   MultiObjectVoting& operator=(const MultiObjectVoting&) = delete;
   MultiObjectVoting(MultiObjectVoting&&) noexcept = default;
@@ -186,13 +243,22 @@ public:
   std::size_t size() const noexcept { return n_; }
   // Scene index of candidate k.
   Index candidate(std::size_t k) const { return candidates_.empty() ? static_cast<Index>(k) : candidates_[k]; }
-  // Views that carried evidence (a mask), queued ones included.
+  // Views that carried evidence (a mask), queued ones included, less the ones taken back.
   std::size_t views() const noexcept { return views_; }
 
   // One view: masks[k] is object k's mask, or all null for "no evidence" (nothing counted).
   // A mix of null and non-null masks in one view is an error (the visible counter is shared).
   void add_view(const Camera& camera, std::span<const Mask* const> masks) {
-    if (!enqueue(camera, masks)) return;
+    if (!enqueue(camera, masks, 1)) return;
+    if (queue_.size() >= block_views) flush();
+  }
+  // Takes back the votes of a view added earlier with these same masks (Eq. 1-2 are sums over
+  // views): the counters become those of a vote without it. Taking back a view that was never
+  // added leaves meaningless counters; the caller keeps track (Reselection does).
+  void remove_view(const Camera& camera, std::span<const Mask* const> masks) {
+    if (std::none_of(masks.begin(), masks.end(), [](const Mask* m) { return m != nullptr; })) return;
+    if (views_ == 0) throw Error("no view to take back", "view '" + camera.name + "'");
+    if (!enqueue(camera, masks, -1)) return;
     if (queue_.size() >= block_views) flush();
   }
 
@@ -206,7 +272,7 @@ public:
       if (im->width != camera.width || im->height != camera.height || im->channels != 1)
         throw Error("depth/alpha image is not the view's size with one channel", "view '" + camera.name + "'");
     flush();
-    if (!enqueue(camera, masks)) return;
+    if (!enqueue(camera, masks, 1)) return;
     queue_.back().depth = expected_depth->data.data();
     queue_.back().alpha = alpha->data.data();
     queue_.back().tolerance = tolerance;
@@ -216,22 +282,23 @@ public:
   // Votes every queued view (queries call it).
   void flush() const {
     if (queue_.empty()) return;
-    const std::int64_t n = static_cast<std::int64_t>(n_);
-    parallel_chunks(n, static_cast<std::int64_t>(chunk), [&](std::int64_t, std::int64_t b, std::int64_t e) {
-      detail::vote_range(x_, y_, z_, static_cast<std::size_t>(b), static_cast<std::size_t>(e), queue_,
-                         bits_.data(), n_objects_, visible_.data(), fg_.data(), n_);
+    const std::size_t per_task = std::max<std::size_t>(1, chunk / detail::ChunkedMeans::chunk_size);
+    const std::int64_t chunks = static_cast<std::int64_t>(means_.chunks());
+    parallel_chunks(chunks, static_cast<std::int64_t>(per_task), [&](std::int64_t, std::int64_t b, std::int64_t e) {
+      detail::vote_chunks(means_, static_cast<std::size_t>(b), static_cast<std::size_t>(e), queue_, bits_.data(),
+                          tiles_.data(), n_objects_, visible_.data(), fg_.data(), n_);
     });
     queue_.clear();
     bits_.clear();
   }
 
   // Counters of candidate k: views where it is visible (label != -1) / foreground for object o.
-  std::uint16_t visible(std::size_t k) const { flush(); return visible_[k]; }
-  std::uint16_t foreground(int o, std::size_t k) const { flush(); return fg_[o * n_ + k]; }
+  std::uint16_t visible(std::size_t k) const { flush(); return visible_[sorted(k)]; }
+  std::uint16_t foreground(int o, std::size_t k) const { flush(); return fg_[o * n_ + sorted(k)]; }
   // Eq. 3: R_k = F_k / max(V_k, 1).
-  float ratio(int o, std::size_t k) const { flush(); return ratio_at(o, k); }
+  float ratio(int o, std::size_t k) const { flush(); return ratio_at(o, sorted(k)); }
   // Eq. 3 by scene index (a candidate's); vcar::Error if it is not a candidate.
-  float ratio_of(int o, Index scene_index) const { flush(); return ratio_at(o, position_of(scene_index)); }
+  float ratio_of(int o, Index scene_index) const { flush(); return ratio_at(o, sorted(position_of(scene_index))); }
   // Position among the candidates of a scene index; vcar::Error if it is not a candidate.
   std::size_t position_of(Index scene_index) const {
     if (candidates_.empty()) {
@@ -252,41 +319,57 @@ public:
   std::vector<std::uint8_t> labels(int o, float tau) const {
     flush();
     std::vector<std::uint8_t> y(n_);
-    for (std::size_t k = 0; k < n_; ++k) y[k] = selected_at(o, k, tau);
+    for (std::size_t j = 0; j < n_; ++j) y[means_.order[j]] = ratio_at(o, j) >= tau;
     return y;
   }
   // Scene indices (ascending) of the candidates with R >= tau for object o.
   std::vector<Index> selected(int o, float tau) const {
     flush();
     std::vector<Index> out;
-    for (std::size_t k = 0; k < n_; ++k)
-      if (selected_at(o, k, tau)) out.push_back(candidate(k));
+    for (std::size_t j = 0; j < n_; ++j)
+      if (ratio_at(o, j) >= tau) out.push_back(candidate(means_.order[j]));
     std::sort(out.begin(), out.end());
     return out;
   }
 
+  // Bytes held: counters, sorted means and order, packed masks and tile summaries.
+  std::size_t bytes() const {
+    std::size_t b = (visible_.capacity() + fg_.capacity()) * sizeof(std::uint16_t) + rank_.capacity() * 4 +
+                    means_.order.capacity() * 4 + means_.box.capacity() * sizeof(means_.box[0]) + bits_.capacity();
+    for (const auto& c : means_.xyz) b += c.capacity() * sizeof(float);
+    for (const auto& t : tiles_) b += t.bytes();
+    return b;
+  }
+
 private:
   // Queues one view (packing its masks); false when it carries no evidence.
-  bool enqueue(const Camera& camera, std::span<const Mask* const> masks) {
+  bool enqueue(const Camera& camera, std::span<const Mask* const> masks, int sign) {
     if (std::none_of(masks.begin(), masks.end(), [](const Mask* m) { return m != nullptr; }))
       return false;  // conventions §4: no evidence, nothing counted
-    check_view(camera, masks);
+    check_view(camera, masks, sign);
     detail::VoteView w = detail::VoteView::from(camera);
+    w.sign = sign;
     w.bits_offset = bits_.size();
+    w.tiles_offset = queue_.size() * static_cast<std::size_t>(n_objects_);
     bits_.resize(bits_.size() + w.bytes_per_mask * n_objects_);
-    for (int k = 0; k < n_objects_; ++k)
+    if (tiles_.size() < w.tiles_offset + n_objects_) tiles_.resize(w.tiles_offset + n_objects_);
+    for (int k = 0; k < n_objects_; ++k) {
       detail::pack_mask_bits(*masks[k], bits_.data() + w.bits_offset + k * w.bytes_per_mask);
+      tiles_[w.tiles_offset + k].build(*masks[k]);
+    }
     queue_.push_back(w);
-    ++views_;
+    views_ = sign > 0 ? views_ + 1 : views_ - 1;
     return true;
   }
   void init(const float* x, const float* y, const float* z, std::size_t n, int n_objects) {
-    if (n_objects < 1) throw Error("need at least one object", "voting");
-    x_ = x; y_ = y; z_ = z; n_ = n; n_objects_ = n_objects;
+    if (n_objects < 1 || n_objects > max_objects)
+      throw Error("need 1 to " + std::to_string(max_objects) + " objects, got " + std::to_string(n_objects), "voting");
+    n_ = n; n_objects_ = n_objects;
+    means_ = detail::ChunkedMeans(x, y, z, n);
     visible_.assign(n, 0);
     fg_.assign(n * static_cast<std::size_t>(n_objects), 0);
   }
-  void check_view(const Camera& camera, std::span<const Mask* const> masks) const {
+  void check_view(const Camera& camera, std::span<const Mask* const> masks, int sign) const {
     const std::string where = "view '" + camera.name + "'";
     if (masks.size() != static_cast<std::size_t>(n_objects_))
       throw Error("expected " + std::to_string(n_objects_) + " masks, got " + std::to_string(masks.size()), where);
@@ -296,26 +379,32 @@ private:
         throw Error("mask is " + std::to_string(m->width) + "x" + std::to_string(m->height) + ", view is " +
                     std::to_string(camera.width) + "x" + std::to_string(camera.height), where);
     }
-    if (views_ + 1 > max_views) throw Error("more than 65535 views with masks (uint16_t counters)", where);
+    if (sign > 0 && views_ + 1 > max_views) throw Error("more than 65535 views with masks (uint16_t counters)", where);
   }
-  float ratio_at(int o, std::size_t k) const {  // Eq. 3
-    return static_cast<float>(fg_[o * n_ + k]) / static_cast<float>(std::max<std::uint16_t>(visible_[k], 1));
+  // Sorted position of candidate k (the inverse order, built on first use).
+  std::size_t sorted(std::size_t k) const {
+    if (rank_.empty() && n_ > 0) {
+      rank_.resize(n_);
+      for (std::size_t j = 0; j < n_; ++j) rank_[means_.order[j]] = static_cast<std::uint32_t>(j);
+    }
+    return rank_[k];
   }
-  bool selected_at(int o, std::size_t k, float tau) const {
-    return ratio_at(o, k) >= tau;
+  float ratio_at(int o, std::size_t j) const {  // Eq. 3, by sorted position
+    return static_cast<float>(fg_[o * n_ + j]) / static_cast<float>(std::max<std::uint16_t>(visible_[j], 1));
   }
 
-  const float *x_ = nullptr, *y_ = nullptr, *z_ = nullptr;
   std::size_t n_ = 0;
   int n_objects_ = 1;
   std::vector<Index> candidates_;              // empty: candidate k is scene index k
-  std::array<std::vector<float>, 3> own_;      // copied means of a subset
+  detail::ChunkedMeans means_;                 // Morton-sorted means and chunk boxes
+  mutable std::vector<std::uint32_t> rank_;    // candidate k -> sorted position (on first use)
   mutable std::vector<std::pair<Index, std::size_t>> by_index_;  // (scene index, position), sorted
   std::size_t views_ = 0;
-  mutable std::vector<std::uint16_t> visible_;  // V_i
-  mutable std::vector<std::uint16_t> fg_;       // F_i per object, object-major
+  mutable std::vector<std::uint16_t> visible_;  // V_i, by sorted position
+  mutable std::vector<std::uint16_t> fg_;       // F_i per object, object-major, by sorted position
   mutable std::vector<detail::VoteView> queue_;
   mutable std::vector<std::uint8_t> bits_;
+  std::vector<MaskTiles> tiles_;                // per queued view and object (capacity reused)
 };
 
 // Eq. 1-3 for one object.
@@ -331,6 +420,10 @@ public:
   void add_view(const Camera& camera, const Mask* mask, const ImageF* expected_depth, const ImageF* alpha,
                 float tolerance) {
     v_.add_view(camera, std::span<const Mask* const>(&mask, 1), expected_depth, alpha, tolerance);
+  }
+  // Takes back a view added earlier with this same mask (MultiObjectVoting::remove_view).
+  void remove_view(const Camera& camera, const Mask* mask) {
+    v_.remove_view(camera, std::span<const Mask* const>(&mask, 1));
   }
   void flush() const { v_.flush(); }
 

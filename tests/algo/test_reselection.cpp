@@ -1,0 +1,134 @@
+#include <catch2/catch.hpp>
+
+#include <random>
+
+#include "vcar/algo/reselection.hpp"
+
+#include "point_scene.hpp"
+
+using vcar::Camera;
+using vcar::Mask;
+
+namespace {
+
+// A blob of small Gaussians at the origin and a second one beside it, ring cameras, masks of
+// the first blob's disc (one per camera).
+struct Fixture {
+  vcar::GaussianScene scene;
+  std::vector<Camera> cams;
+  std::vector<Mask> masks;
+};
+
+Fixture fixture(int n_cams = 10) {
+  Fixture f;
+  std::mt19937 rng(6);
+  std::normal_distribution<float> N(0.f, 0.12f);
+  const int n = 3000;
+  f.scene.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3f c = i < n / 2 ? Eigen::Vector3f(0, 0, 0) : Eigen::Vector3f(0.9f, 0, 0);
+    f.scene.set(i, c + Eigen::Vector3f(N(rng), N(rng), N(rng)), Eigen::Vector3f::Constant(std::log(0.02f)),
+                {1, 0, 0, 0}, 2.f);
+  }
+  for (int j = 0; j < n_cams; ++j) {
+    const float a = 6.2831853f * j / n_cams;
+    const Camera c = Camera::look_at({3.f * std::cos(a), 0.5f, 3.f * std::sin(a)}, {0.45f, 0, 0}, {0, -1, 0},
+                                     {120, 90, 110, 110, 60, 45}, "cam" + std::to_string(j));
+    f.cams.push_back(c);
+    Mask m(120, 90, 1, 0);  // the first blob's disc: radius 0.3 around the origin
+    const Eigen::Vector3f t = c.to_camera(Eigen::Vector3f::Zero());
+    const float u = c.fx * t.x() / t.z() + c.cx, v = c.fy * t.y() / t.z() + c.cy, r = c.fx * 0.3f / t.z();
+    for (int y = 0; y < 90; ++y)
+      for (int x = 0; x < 120; ++x) m(x, y) = (x + 0.5f - u) * (x + 0.5f - u) + (y + 0.5f - v) * (y + 0.5f - v) < r * r ? 255 : 0;
+    f.masks.push_back(m);
+  }
+  return f;
+}
+
+vcar::VcarParams paper_no_sss() {
+  vcar::VcarParams p = vcar::VcarParams::nvos();
+  p.enable_sss = false;
+  return p;
+}
+
+vcar::SegmentationResult segment_with(const Fixture& f, const std::vector<const Mask*>& masks, const vcar::VcarParams& p) {
+  auto renderer = [](const vcar::RenderRequest& q) {
+    vcar::RenderOutput o;
+    o.rgb = vcar::ImageF(q.camera->width, q.camera->height, 3, 0.f);
+    return o;
+  };
+  auto r = vcar::make_renderer(renderer);
+  auto s = vcar::make_segmenter([&](const vcar::FrameSequence& fr, const vcar::Prompt&) {
+    std::vector<std::optional<Mask>> out(fr.size());
+    for (std::size_t k = 0; k < fr.size(); ++k)
+      if (masks[k]) out[k] = *masks[k];  // reference view 0: frame k is view k
+    return out;
+  });
+  return vcar::segment(f.scene, f.cams, vcar::Prompt{}, r, s, p);
+}
+
+}  // namespace
+
+TEST_CASE("Reselection equals vcar::segment with the same masks and SSS off, after any edits") {
+  const Fixture f = fixture();
+  const vcar::VcarParams p = paper_no_sss();
+  vcar::Reselection r(f.scene, f.cams, p);
+  std::vector<const Mask*> held(f.cams.size(), nullptr);
+  for (std::size_t j = 0; j < f.cams.size(); j += 2) {  // half the masks
+    r.set_mask(j, &f.masks[j]);
+    held[j] = &f.masks[j];
+  }
+  CHECK(r.masks() == 5);
+  auto same = [&](const vcar::SegmentationResult& a, const vcar::SegmentationResult& b) {
+    CHECK(a.indices == b.indices);
+    CHECK(a.scores == b.scores);
+    CHECK(a.log_scale == b.log_scale);
+    CHECK(a.diagnostics.abr_compressed == b.diagnostics.abr_compressed);
+  };
+  same(r.select(), segment_with(f, held, p));
+  // One more mask, one replaced by its neighbour's (a wrong mask), one cleared.
+  r.set_mask(1, &f.masks[1]);
+  held[1] = &f.masks[1];
+  r.set_mask(4, &f.masks[7]);
+  held[4] = &f.masks[7];
+  r.set_mask(6, nullptr);
+  held[6] = nullptr;
+  CHECK(r.masks() == 5);
+  const auto edited = r.select();
+  same(edited, segment_with(f, held, p));
+  CHECK(edited.diagnostics.masks_missing == 5);
+  // Every mask set: the first blob's Gaussians are selected, the second blob's are not.
+  for (std::size_t j = 0; j < f.cams.size(); ++j) {
+    r.set_mask(j, &f.masks[j]);
+    held[j] = &f.masks[j];
+  }
+  const auto all = r.select();
+  same(all, segment_with(f, held, p));
+  std::size_t first = 0;
+  for (vcar::Index i : all.indices) first += i < 1500;
+  CHECK(first > 1200);
+  CHECK(all.indices.size() - first < 50);
+}
+
+TEST_CASE("Reselection reports the view-completeness gap that SSS would fill, and refuses what it cannot do") {
+  Fixture f = fixture(3);
+  f.cams.resize(2);  // two nearby views: a large gap
+  vcar::VcarParams p = vcar::VcarParams::nvos();
+  vcar::Reselection r(f.scene, f.cams, p);
+  r.set_mask(0, &f.masks[0]);
+  r.set_mask(1, &f.masks[1]);
+  const auto res = r.select();
+  CHECK(res.diagnostics.max_gap_deg > p.Delta_th_deg);
+  CHECK(!res.diagnostics.sss_triggered);
+  CHECK(res.diagnostics.note.find("SSS") != std::string::npos);
+
+  CHECK_THROWS_AS(vcar::Reselection(f.scene, f.cams, vcar::VcarParams::robust()), vcar::Error);
+  CHECK_THROWS_AS(vcar::Reselection(f.scene, {}, p), vcar::Error);
+  CHECK_THROWS_AS(r.set_mask(2, &f.masks[0]), vcar::Error);         // view out of range
+  const Mask small(10, 10, 1, 0);
+  CHECK_THROWS_AS(r.set_mask(0, &small), vcar::Error);  // wrong size
+  CHECK_THROWS_AS(r.select(5), vcar::Error);
+  vcar::Reselection none(f.scene, f.cams, p);
+  CHECK(none.select().indices.empty());
+  CHECK(!none.select().diagnostics.note.empty());
+}

@@ -1,0 +1,62 @@
+#include <catch2/catch.hpp>
+
+#include <random>
+
+#include "vcar/core/mask_tiles.hpp"
+
+using vcar::Mask;
+using vcar::MaskTiles;
+
+namespace {
+
+// Brute force over the rectangle's pixels (clipped): 0 none, 2 all, 1 both.
+int brute(const Mask& m, int x0, int y0, int x1, int y1) {
+  bool fg = false, bg = false;
+  for (int y = std::max(0, y0); y <= std::min(m.height - 1, y1); ++y)
+    for (int x = std::max(0, x0); x <= std::min(m.width - 1, x1); ++x) (m(x, y) ? fg : bg) = true;
+  return fg && bg ? 1 : fg ? 2 : 0;
+}
+
+}  // namespace
+
+TEST_CASE("MaskTiles: none and all are exact, mixed is conservative, tile-aligned rectangles are exact") {
+  std::mt19937 rng(4);
+  for (auto [W, H] : {std::pair{64, 48}, std::pair{37, 29}}) {  // whole and partial tiles
+    Mask m(W, H, 1, 0);
+    // Blocks of foreground with ragged edges and a few isolated pixels.
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) m(x, y) = (x > 5 && x < W - 9 && y > 3 && y < H / 2 + (x % 5)) ? 255 : 0;
+    m(1, H - 2) = 7;
+    MaskTiles t;
+    t.build(m);
+    std::uniform_int_distribution<int> X(-5, W + 4), Y(-5, H + 4);
+    int counts[3] = {0, 0, 0};
+    for (int k = 0; k < 4000; ++k) {
+      int x0 = X(rng), x1 = X(rng), y0 = Y(rng), y1 = Y(rng);
+      if (x0 > x1) std::swap(x0, x1);
+      if (y0 > y1) std::swap(y0, y1);
+      const int want = brute(m, x0, y0, x1, y1);
+      const MaskTiles::Content got = t.classify(x0, y0, x1, y1);
+      INFO(W << "x" << H << " rect " << x0 << "," << y0 << " - " << x1 << "," << y1);
+      if (got == MaskTiles::background) CHECK(want == 0);
+      if (got == MaskTiles::foreground) CHECK(want == 2);
+      if (want == 1) CHECK(got == MaskTiles::mixed);
+      ++counts[got];
+    }
+    CHECK(counts[0] > 0);
+    CHECK(counts[1] > 0);
+    if (W == 64) CHECK(t.classify(8, 16, 23, 23) == MaskTiles::foreground);  // whole tiles inside the block
+    // Tile-aligned rectangles (clipped at the image border) are answered exactly.
+    for (int ty = 0; ty * 8 < H; ++ty)
+      for (int tx = 0; tx * 8 < W; ++tx) {
+        const int want = brute(m, tx * 8, ty * 8, tx * 8 + 7, ty * 8 + 7);
+        CHECK(static_cast<int>(t.classify(tx * 8, ty * 8, tx * 8 + 7, ty * 8 + 7)) == want);
+      }
+  }
+  MaskTiles t;
+  t.build(Mask(10, 10, 1, 0));
+  CHECK(t.classify(20, 20, 30, 30) == MaskTiles::background);  // wholly outside: no foreground
+  t.build(Mask(10, 10, 1, 1));  // rebuilt in place, all foreground
+  CHECK(t.classify(0, 0, 9, 9) == MaskTiles::foreground);
+  CHECK(t.classify(-3, 4, 5, 40) == MaskTiles::foreground);  // clipped to the image
+}

@@ -1,0 +1,42 @@
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <numeric>
+#include <random>
+
+#include "vcar/core/morton_order.hpp"
+
+TEST_CASE("morton_order: a stable sort by the interleaved 10-bit cell codes") {
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<float> U(-3.f, 5.f);
+  const std::size_t n = 3000;
+  std::vector<float> x(n), y(n), z(n);
+  for (std::size_t k = 0; k < n; ++k) { x[k] = U(rng); y[k] = U(rng); z[k] = 0.5f * U(rng); }
+  x[10] = x[11]; y[10] = y[11]; z[10] = z[11];  // a tie
+  z[20] = NAN;                                  // non-finite: the low corner
+  // Brute force: bit b of axis d's 10-bit cell goes to bit 3 b + d.
+  float lo[3], hi[3];
+  const std::vector<float>* c[3] = {&x, &y, &z};
+  for (int d = 0; d < 3; ++d) {
+    lo[d] = INFINITY; hi[d] = -INFINITY;
+    for (float v : *c[d]) if (std::isfinite(v)) { lo[d] = std::min(lo[d], v); hi[d] = std::max(hi[d], v); }
+  }
+  std::vector<std::uint32_t> code(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    std::uint32_t m = 0;
+    for (int d = 0; d < 3; ++d) {
+      const float v = (*c[d])[k];
+      const float t = std::isfinite(v) ? std::clamp((v - lo[d]) / (hi[d] - lo[d]) * 1024.f, 0.f, 1023.f) : 0.f;
+      const auto cell = static_cast<std::uint32_t>(t);
+      for (int b = 0; b < 10; ++b) m |= ((cell >> b) & 1u) << (3 * b + d);
+    }
+    code[k] = m;
+  }
+  std::vector<std::uint32_t> want(n);
+  std::iota(want.begin(), want.end(), 0u);
+  std::stable_sort(want.begin(), want.end(), [&](std::uint32_t a, std::uint32_t b) { return code[a] < code[b]; });
+  CHECK(vcar::morton_order(x.data(), y.data(), z.data(), n) == want);
+  CHECK(vcar::morton_order(x.data(), y.data(), z.data(), 0).empty());
+  const float one = 1.f;
+  CHECK(vcar::morton_order(&one, &one, &one, 1) == std::vector<std::uint32_t>{0});
+}
