@@ -49,6 +49,36 @@ Mask random_mask(int w, int h, std::mt19937& rng) {
 
 }  // namespace
 
+namespace {
+
+// Brute-force Eq. 1-2 counts over the views with a mask (the per-mean definition).
+void brute_counts(const vcar::GaussianScene& scene, const std::vector<Camera>& cams,
+                  const std::vector<const Mask*>& masks, std::vector<int>& V, std::vector<int>& F) {
+  V.assign(scene.size(), 0);
+  F.assign(scene.size(), 0);
+  for (std::size_t j = 0; j < cams.size(); ++j) {
+    if (!masks[j]) continue;
+    for (std::size_t i = 0; i < scene.size(); ++i) {
+      const Eigen::Vector3f t = cams[j].to_camera(scene.mu(i));
+      if (!(t.z() > 0)) continue;
+      const float u = cams[j].fx * t.x() / t.z() + cams[j].cx, v = cams[j].fy * t.y() / t.z() + cams[j].cy;
+      if (!vcar::inside_image(u, v, cams[j].width, cams[j].height)) continue;
+      ++V[i];
+      F[i] += vcar::mask_at(*masks[j], u, v);
+    }
+  }
+}
+
+// A disc mask (large uniform regions: the chunks of the voter are decided whole).
+Mask disc_mask(int W, int H, float cx, float cy, float r) {
+  Mask m(W, H, 1, 0);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) m(x, y) = (x + 0.5f - cx) * (x + 0.5f - cx) + (y + 0.5f - cy) * (y + 0.5f - cy) < r * r;
+  return m;
+}
+
+}  // namespace
+
 TEST_CASE("Eq. 1-3 by hand: boundaries, floor lookup, invisible views and a null mask") {
   const auto scene = scene_of({
       {0, 0, 1},        // 0: pixel (5,5)
@@ -95,18 +125,10 @@ TEST_CASE("voting equals a scalar brute force, for any block size and thread cou
     if (j % 4 == 2) masks.emplace_back();  // a few views without evidence
     else masks.emplace_back(random_mask(cams[j].width, cams[j].height, rng));
   }
-  std::vector<int> V(scene.size(), 0), F(scene.size(), 0);
-  for (std::size_t j = 0; j < cams.size(); ++j) {
-    if (!masks[j]) continue;
-    for (std::size_t i = 0; i < scene.size(); ++i) {
-      const Eigen::Vector3f t = cams[j].to_camera(scene.mu(i));
-      if (!(t.z() > 0)) continue;
-      const float u = cams[j].fx * t.x() / t.z() + cams[j].cx, v = cams[j].fy * t.y() / t.z() + cams[j].cy;
-      if (!vcar::inside_image(u, v, cams[j].width, cams[j].height)) continue;
-      ++V[i];
-      F[i] += vcar::mask_at(*masks[j], u, v);
-    }
-  }
+  std::vector<const Mask*> ptrs;
+  for (const auto& m : masks) ptrs.push_back(m ? &*m : nullptr);
+  std::vector<int> V, F;
+  brute_counts(scene, cams, ptrs, V, F);
   int visible_somewhere = 0;
   for (int v : V) visible_somewhere += v > 0;
   REQUIRE(visible_somewhere > 100);
@@ -230,36 +252,6 @@ TEST_CASE("voting rejects bad masks naming the view, and more than 65535 views")
   CHECK_THROWS_AS(vote.add_view(A, &fg), vcar::Error);
   CHECK_NOTHROW(vote.add_view(A, nullptr));  // no evidence counts nothing
 }
-
-namespace {
-
-// Brute-force Eq. 1-2 counts over the views with a mask (the per-mean definition).
-void brute_counts(const vcar::GaussianScene& scene, const std::vector<Camera>& cams,
-                  const std::vector<const Mask*>& masks, std::vector<int>& V, std::vector<int>& F) {
-  V.assign(scene.size(), 0);
-  F.assign(scene.size(), 0);
-  for (std::size_t j = 0; j < cams.size(); ++j) {
-    if (!masks[j]) continue;
-    for (std::size_t i = 0; i < scene.size(); ++i) {
-      const Eigen::Vector3f t = cams[j].to_camera(scene.mu(i));
-      if (!(t.z() > 0)) continue;
-      const float u = cams[j].fx * t.x() / t.z() + cams[j].cx, v = cams[j].fy * t.y() / t.z() + cams[j].cy;
-      if (!vcar::inside_image(u, v, cams[j].width, cams[j].height)) continue;
-      ++V[i];
-      F[i] += vcar::mask_at(*masks[j], u, v);
-    }
-  }
-}
-
-// A disc mask (large uniform regions: the chunks of the voter are decided whole).
-Mask disc_mask(int W, int H, float cx, float cy, float r) {
-  Mask m(W, H, 1, 0);
-  for (int y = 0; y < H; ++y)
-    for (int x = 0; x < W; ++x) m(x, y) = (x + 0.5f - cx) * (x + 0.5f - cx) + (y + 0.5f - cy) * (y + 0.5f - cy) < r * r;
-  return m;
-}
-
-}  // namespace
 
 TEST_CASE("chunked voting (whole chunks decided per view) equals the per-mean brute force") {
   // Many means in a small cube seen from a ring at 160 x 120 with disc masks: most chunks fall
