@@ -198,19 +198,16 @@ class BoundaryRefinement {
                                                          scene.rotation[2][i], scene.rotation[3][i]);
       for (int e = 0; e < 9; ++e) rot_[e][j] = R(e % 3, e / 3);
     }
-    // Chunk boxes of the centres and the largest sum_d s_d^2 per chunk (the bound of add_view).
+    // Chunk boxes of the centres and the largest max_d s_d^2 per chunk (the bound of add_view).
     const std::size_t chunks = (n + kBox - 1) / kBox;
     box_.resize(chunks);
     for (std::size_t c = 0; c < chunks; ++c) {
-      std::array<float, 7> b{INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY, 0.f};
-      for (std::size_t j = c * kBox; j < std::min(n, (c + 1) * kBox); ++j) {
-        for (int d = 0; d < 3; ++d) {
-          if (!std::isfinite(mu_[d][j])) b[d] = NAN;  // the chunk is observed Gaussian by Gaussian
-          b[d] = std::min(b[d], mu_[d][j]);
-          b[3 + d] = std::max(b[3 + d], mu_[d][j]);
-        }
-        const float ss = s_[0][j] * s_[0][j] + s_[1][j] * s_[1][j] + s_[2][j] * s_[2][j];
-        b[6] = std::isfinite(ss) ? std::max(b[6], ss) : INFINITY;
+      const std::size_t j0 = c * kBox, j1 = std::min(n, (c + 1) * kBox);
+      const std::array<float, 6> mb = detail::mean_box(mu_[0].data(), mu_[1].data(), mu_[2].data(), j0, j1);
+      std::array<float, 7> b{mb[0], mb[1], mb[2], mb[3], mb[4], mb[5], 0.f};
+      for (std::size_t j = j0; j < j1; ++j) {
+        const float s2 = max_scale_squared(j);
+        b[6] = std::isfinite(s2) ? std::max(b[6], s2) : INFINITY;
       }
       box_[c] = b;
     }
@@ -244,8 +241,7 @@ class BoundaryRefinement {
         }
         for (std::size_t k = j0; k < j1; ++k) {
           const Eigen::Vector3f mu(mu_[0][k], mu_[1][k], mu_[2][k]);
-          const float smax = std::max(s_[0][k], std::max(s_[1][k], s_[2][k]));
-          switch (gaussian_content(cam, mu, smax * smax, p)) {
+          switch (gaussian_content(cam, mu, max_scale_squared(k), p)) {
             case MaskTiles::background: continue;        // not eligible (B.1)
             case MaskTiles::foreground: ++n_vis_[k]; continue;  // eligible, no endpoint outside
             case MaskTiles::mixed: break;
@@ -303,11 +299,22 @@ class BoundaryRefinement {
   }
 
  private:
+  // max_d s_d^2 of slot j: the largest eigenvalue of its 3D covariance R S^2 R^T; +inf when a
+  // scale is not finite (no fast path).
+  float max_scale_squared(std::size_t j) const {
+    float m = 0.f;
+    for (int d = 0; d < 3; ++d) {
+      if (!std::isfinite(s_[d][j])) return INFINITY;
+      m = std::max(m, s_[d][j]);
+    }
+    return m * m;
+  }
+
   // What one view says about a whole chunk of centres (a Morton run of kBox slots): background
   // when no centre can land on foreground (none eligible, B.1); foreground when every centre and
   // every 3-sigma endpoint lands on foreground inside the image (all eligible, none overflows:
   // Eq. 9's endpoints lie within sigma_c sqrt(lambda_1) of the centre, and by Eq. 10 lambda_1 <=
-  // ||J||^2 sum_d s_d^2 + eps2d); mixed otherwise (observed Gaussian by Gaussian).
+  // ||J||^2 max_d s_d^2 + eps2d); mixed otherwise (observed Gaussian by Gaussian).
   MaskTiles::Content chunk_content(const detail::MeanProjection& P, const Camera& cam, const std::array<float, 7>& b,
                                    const AbrParams& p) const {
     const detail::BoxView v = detail::project_box(P, b.data(), b.data() + 3);
@@ -316,19 +323,13 @@ class BoundaryRefinement {
     if (centres == MaskTiles::background) return MaskTiles::background;
     if (v.visibility != detail::BoxView::all_visible || !(p.projection.eps2d > 0.f)) return MaskTiles::mixed;
     // Nearest camera depth over the box (affine in the point: at a corner), with margin.
-    float zmin = INFINITY, tmax = 0.f;  // nearest depth, bound of ||J||^2 (z / f)^2
-    for (int c = 0; c < 8; ++c) {
-      const float q[3] = {(c & 1) ? b[3] : b[0], (c & 2) ? b[4] : b[1], (c & 4) ? b[5] : b[2]};
-      const Eigen::Vector3f t = cam.to_camera(Eigen::Vector3f(q[0], q[1], q[2]));
-      zmin = std::min(zmin, t.z());
-    }
-    zmin *= 0.999f;
+    const float zmin = v.zmin * 0.999f;
     if (!(zmin >= p.projection.near_plane * 1.001f) || !(zmin < p.projection.far_plane * 0.999f)) return MaskTiles::mixed;
     // ||J||^2 <= ||J||_F^2 <= (f / z)^2 (2 + (tx/z)^2 + (ty/z)^2), |tx/z|, |ty/z| clamped to the frustum limits.
     const float W = static_cast<float>(cam.width), H = static_cast<float>(cam.height);
     const float lx = std::max(W - cam.cx, cam.cx) / cam.fx + p.projection.frustum_margin * 0.5f * W / cam.fx;
     const float ly = std::max(H - cam.cy, cam.cy) / cam.fy + p.projection.frustum_margin * 0.5f * H / cam.fy;
-    tmax = 2.f + lx * lx + ly * ly;
+    const float tmax = 2.f + lx * lx + ly * ly;
     const float f = std::max(cam.fx, cam.fy) / zmin;
     const float lambda1 = f * f * tmax * b[6] + p.projection.eps2d;
     const float reach = p.sigma_c * std::sqrt(lambda1) * 1.001f + 1.f;  // px, with margin
@@ -373,7 +374,7 @@ class BoundaryRefinement {
   std::array<std::vector<float>, 3> mu_;     // candidate means
   std::array<std::vector<float>, 9> rot_;    // candidate rotation matrices, column-major
   std::array<std::vector<float>, 3> s_;      // candidate scales exp(log s)
-  std::vector<std::array<float, 7>> box_;    // per kBox slots: centre box lo, hi, max sum_d s_d^2
+  std::vector<std::array<float, 7>> box_;    // per kBox slots: centre box lo, hi, max max_d s_d^2
   MaskTiles tiles_;                          // the current view's mask in tiles
   LogScales log_s_;                          // candidate log-scales before refinement (by slot)
   std::array<std::vector<float>, 3> f_;      // running minimum candidate factor per axis

@@ -108,6 +108,7 @@ struct BoxView {
   enum Case : std::uint8_t { none_visible, all_visible, partial };
   Case visibility = partial;
   int x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // pixel rectangle holding every visible projected mean
+  float zmin = 0.f;                    // smallest camera depth of the corners (when in front)
 };
 
 inline BoxView project_box(const MeanProjection& w, const float lo[3], const float hi[3]) {
@@ -134,6 +135,7 @@ inline BoxView project_box(const MeanProjection& w, const float lo[3], const flo
   const float dz = 1e-5f * scale;
   if (zmax < -dz) { out.visibility = BoxView::none_visible; return out; }  // every z < 0
   if (!(zmin > dz)) return out;                                            // straddles z = 0
+  out.zmin = zmin;
   float umin = INFINITY, umax = -INFINITY, vmin = INFINITY, vmax = -INFINITY;
   for (int c = 0; c < 8; ++c) {
     const float u = w.fx * t[c][0] / t[c][2] + w.cx, v = w.fy * t[c][1] / t[c][2] + w.cy;
@@ -152,6 +154,21 @@ inline BoxView project_box(const MeanProjection& w, const float lo[3], const flo
   out.y1 = static_cast<int>(std::floor(std::min(vmax, H - 1.f)));
   if (umin >= 0.f && vmin >= 0.f && umax < W && vmax < H) out.visibility = BoxView::all_visible;
   return out;
+}
+
+// Bounding box (lo x, y, z, hi x, y, z) of the means [begin, end) of SoA columns; a non-finite
+// mean makes the box non-finite, which project_box answers with "partial" (per-mean test).
+inline std::array<float, 6> mean_box(const float* x, const float* y, const float* z, std::size_t begin,
+                                     std::size_t end) {
+  const float* c[3] = {x, y, z};
+  std::array<float, 6> b{INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
+  for (std::size_t j = begin; j < end; ++j)
+    for (int d = 0; d < 3; ++d) {
+      if (!std::isfinite(c[d][j])) b[d] = NAN;  // std::min keeps a NaN first argument
+      b[d] = std::min(b[d], c[d][j]);
+      b[3 + d] = std::max(b[3 + d], c[d][j]);
+    }
+  return b;
 }
 
 }  // namespace vcar::detail

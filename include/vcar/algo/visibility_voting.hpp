@@ -66,8 +66,7 @@ inline void pack_mask_bits(const Mask& m, std::uint8_t* bits) {
 
 static_assert(std::endian::native == std::endian::little, "packed masks are read as little-endian words");
 
-inline bool bit_at(const std::uint8_t* bits, std::int32_t p) { return (bits[p >> 3] >> (p & 7)) & 1; }
-
+inline constexpr int max_vote_objects = 64;  // objects voted in one pass (MultiObjectVoting)
 
 // One queued view: the projection, where its objects' packed masks and tile summaries are, and
 // whether it adds (+1) or takes back (-1) its votes.
@@ -109,16 +108,8 @@ struct ChunkedMeans {
       for (std::size_t j = 0; j < n; ++j) xyz[d][j] = src[d][order[j]];
     }
     box.resize(chunks);
-    for (std::size_t c = 0; c < chunks; ++c) {
-      std::array<float, 6> b{INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
-      for (std::size_t j = c * chunk_size; j < std::min(n, (c + 1) * chunk_size); ++j)
-        for (int d = 0; d < 3; ++d) {
-          if (!std::isfinite(xyz[d][j])) b[d] = NAN;  // a non-finite mean: the chunk is voted per mean
-          b[d] = std::min(b[d], xyz[d][j]);
-          b[3 + d] = std::max(b[3 + d], xyz[d][j]);
-        }
-      box[c] = b;
-    }
+    for (std::size_t c = 0; c < chunks; ++c)
+      box[c] = mean_box(xyz[0].data(), xyz[1].data(), xyz[2].data(), c * chunk_size, std::min(n, (c + 1) * chunk_size));
   }
   std::size_t chunks() const { return box.size(); }
 };
@@ -131,7 +122,7 @@ inline void vote_chunks(const ChunkedMeans& cm, std::size_t c0, std::size_t c1, 
                         std::uint16_t* fg, std::size_t n) {
   using BI = simd::batch<std::int32_t>;
   constexpr std::size_t L = mean_batch, C = ChunkedMeans::chunk_size;
-  constexpr std::size_t max_objects = 64;
+  constexpr std::size_t max_objects = max_vote_objects;
   const std::size_t K = static_cast<std::size_t>(n_objects);
   alignas(64) std::int32_t acc[(1 + 4) * C];  // visible + up to 4 objects in one pass
   std::int32_t add[1 + max_objects];
@@ -214,7 +205,7 @@ inline void vote_chunks(const ChunkedMeans& cm, std::size_t c0, std::size_t c1, 
 class MultiObjectVoting {
 public:
   static constexpr std::size_t max_views = 65535;  // uint16_t counters
-  static constexpr int max_objects = 64;
+  static constexpr int max_objects = detail::max_vote_objects;
   std::size_t block_views = 8;                     // views voted per pass over the candidates
   std::size_t chunk = 2048;                        // candidates per parallel task (fixed)
 
