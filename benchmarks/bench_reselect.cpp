@@ -4,7 +4,7 @@
 //   - one CPU render of the scene at that size (the budget a re-selection should stay under);
 //   - vcar::segment with the masks as its segmenter, SSS off (the paper's vote, nvos preset);
 //   - vcar::Reselection: setting every mask (the full vote) + select, then one mask changed +
-//     select (the incremental path; its coarse_voting line is the vote's share);
+//     select, with ABR from scratch and incremental (its coarse_voting line is the vote's share);
 // at 1 thread and at every available thread. Checks that Reselection's selection and log-scales
 // equal vcar::segment's, and prints the peak resident memory.
 //   bench_reselect [N=1000000] [M=100] [W=1008] [H=756]
@@ -110,15 +110,26 @@ int main(int argc, char** argv) {
     });
     std::printf("%-46s %8d %10.4f\n", "Reselection: every mask set + select", t, full);
     bool flip = true;
-    const double incremental = median_seconds(5, [&] {
+    auto one_changed = [&] {
       session->set_mask(static_cast<std::size_t>(M / 2), flip ? &changed : &masks[M / 2]);
       flip = !flip;
       first = session->select();
-    });
-    std::printf("%-46s %8d %10.4f   (%.2f of one render)\n", "Reselection: one mask changed + select", t,
-                incremental, incremental / render);
+    };
+    session->set_incremental_abr(false);
+    const double scratch = median_seconds(5, one_changed);
+    std::printf("%-46s %8d %10.4f   (%.2f of one render)\n", "Reselection: one mask changed, ABR anew", t,
+                scratch, scratch / render);
     for (const auto& [stage, s] : first.diagnostics.timings_s)
       std::printf("  %-44s %8d %10.4f\n", stage.c_str(), t, s);
+    session->set_incremental_abr(true);
+    const double incremental = median_seconds(5, one_changed);
+    const vcar::ReselectionStats st = session->last_stats();
+    std::printf("%-46s %8d %10.4f   (%.2f of one render, %.1fx faster than ABR anew)\n",
+                "Reselection: one mask changed + select", t, incremental, incremental / render, scratch / incremental);
+    for (const auto& [stage, s] : first.diagnostics.timings_s)
+      std::printf("  %-44s %8d %10.4f\n", stage.c_str(), t, s);
+    std::printf("  ABR %s: %zu view(s) changed, %zu Gaussians carried (%zu minima recomputed), %zu new\n",
+                st.abr_incremental ? "incremental" : "anew", st.views_changed, st.carried, st.stale, st.fresh);
     // Back to the original masks: the result must be vcar::segment's.
     session->set_mask(static_cast<std::size_t>(M / 2), &masks[M / 2]);
     const vcar::SegmentationResult again = session->select();

@@ -26,5 +26,6 @@
 #include "vcar/algo/boundary_distance.hpp"
 #include "vcar/algo/boundary_refinement.hpp"
 #include "vcar/algo/pipeline.hpp"
+#include "vcar/algo/reselection.hpp"
 
 #include "vcar/backends/cpu/tiled_renderer.hpp"

@@ -4,7 +4,8 @@
 // A streaming accumulator over a candidate set (typically G_fine): every training view with a
 // mask from the latest segmentation round is added once (conventions §5); `finish` applies the
 // gated, reconciled per-axis compression. Per candidate the state is O(1) in the number of views:
-// n_vis, n_ovf (uint16) and the running minimum candidate factor of each of the 3 axes.
+// n_vis, n_ovf (uint16) and the running minimum candidate factor of each of the 3 axes (with the
+// view that set it, for the incremental updates that Reselection uses).
 //
 // Rules where the paper leaves room (each is tested):
 //  (a) Eq. 13 numerator (l/sigma_c)^2 - lambda + w_{d*} <= 0: the other axes (and eps2d) already
@@ -184,6 +185,7 @@ class BoundaryRefinement {
     for (auto& c : s_) c.resize(n);
     for (auto& c : log_s_) c.resize(n);
     for (auto& c : f_) c.assign(n, std::numeric_limits<float>::infinity());
+    for (auto& c : arg_) c.assign(n, no_view);
     n_vis_.assign(n, 0);
     n_ovf_.assign(n, 0);
     for (std::size_t j = 0; j < n; ++j) {  // internal slot j holds candidate order[j]
@@ -214,50 +216,111 @@ class BoundaryRefinement {
   }
 
   // One training view with its mask (B.3). Throws vcar::Error naming the view for a bad camera,
-  // a mask of another size than the view, or more views than the uint16 counters hold.
-  void add_view(const Camera& cam, const Mask& mask) {
-    const std::string where = "view '" + cam.name + "'";
-    cam.validate();
-    if (mask.width != cam.width || mask.height != cam.height || mask.channels != 1 ||
-        mask.data.size() != mask.pixels())
-      throw Error("mask is " + std::to_string(mask.width) + "x" + std::to_string(mask.height) + "x" +
-                  std::to_string(mask.channels) + ", the view is " + std::to_string(cam.width) + "x" +
-                  std::to_string(cam.height) + "x1", where);
+  // a mask of another size than the view, or more views than the uint16 counters hold. `view`
+  // names the view for the incremental updates below (default: the number of views added so far).
+  void add_view(const Camera& cam, const Mask& mask) { add_view(cam, mask, static_cast<std::uint16_t>(views_)); }
+  void add_view(const Camera& cam, const Mask& mask, std::uint16_t view) {
+    check_view(cam, mask, view);
     if (views_ == std::numeric_limits<std::uint16_t>::max())
-      throw Error("more than 65535 views for ABR", where);
+      throw Error("more than 65535 views for ABR", "view '" + cam.name + "'");
     ++views_;
-    const AbrParams p = params_;
     tiles_.build(mask);
-    const detail::MeanProjection P = detail::MeanProjection::from(cam);
-    parallel_chunks(static_cast<std::int64_t>(box_.size()), kChunk / kBox, [&](std::int64_t, std::int64_t b, std::int64_t e) {
-      for (std::int64_t c = b; c < e; ++c) {
-        const std::size_t j0 = static_cast<std::size_t>(c) * kBox, j1 = std::min(size(), j0 + kBox);
-        switch (chunk_content(P, cam, box_[c], p)) {
-          case MaskTiles::background: continue;  // no centre on foreground: none eligible (B.1)
-          case MaskTiles::foreground:            // every centre and endpoint on foreground
-            for (std::size_t k = j0; k < j1; ++k) ++n_vis_[k];
-            continue;
-          case MaskTiles::mixed: break;
-        }
-        for (std::size_t k = j0; k < j1; ++k) {
-          const Eigen::Vector3f mu(mu_[0][k], mu_[1][k], mu_[2][k]);
-          switch (gaussian_content(cam, mu, max_scale_squared(k), p)) {
-            case MaskTiles::background: continue;        // not eligible (B.1)
-            case MaskTiles::foreground: ++n_vis_[k]; continue;  // eligible, no endpoint outside
-            case MaskTiles::mixed: break;
-          }
-          Eigen::Matrix3f R;
-          for (int q = 0; q < 9; ++q) R(q % 3, q / 3) = rot_[q][k];
-          const Eigen::Vector3f s(s_[0][k], s_[1][k], s_[2][k]);
-          const AbrObservation obs = observe_gaussian(cam, mask, mu, R, s, p);
-          if (!obs.eligible) continue;
-          ++n_vis_[k];
-          if (!obs.overflow) continue;
-          ++n_ovf_[k];
-          for (int d = 0; d < 3; ++d) f_[d][k] = std::min(f_[d][k], obs.f[d]);  // multi-view min (B.3)
-        }
-      }
+    observe_view(cam, mask, true, [](std::size_t) { return true; }, [&](std::size_t k, const AbrObservation& obs) {
+      add(k, obs, view);
     });
+  }
+
+  // ---- Incremental refinement (beyond the paper; used by Reselection). Eq. 9-13 observe one
+  // Gaussian in one view at a time: a candidate's state is a sum (n_vis, n_ovf) and a minimum
+  // (f_d) over views. So a refinement whose candidates mostly match an earlier one's, under
+  // masks of which few changed, can start from the earlier state:
+  //  1. carry(previous): candidates that `previous` also held take its counts and minima
+  //     ("carried"); the others start with no view ("fresh").
+  //  2. change_view(cam, old_mask, new_mask, view) for each view whose mask changed since
+  //     `previous` saw them (null: no mask): the carried candidates' observation with old_mask is
+  //     taken back (counts exact in integers) and new_mask's added; a carried minimum that this
+  //     view set is marked for recomputation (a minimum cannot be taken back).
+  //  3. complete_view(cam, mask, view) for every view that has a mask now, when incomplete():
+  //     fresh candidates get the whole observation, marked ones their minima.
+  // finish() then equals a refinement that saw every current mask (tested bit for bit).
+  void carry(const BoundaryRefinement& previous) {
+    if (!mode_.empty()) throw Error("carry is called once, before any view", "BoundaryRefinement");
+    if (views_ != 0) throw Error("carry needs a refinement that has seen no view yet", "BoundaryRefinement");
+    const std::size_t n = size();
+    mode_.assign(n, fresh);
+    std::vector<std::pair<Index, std::uint32_t>> prev(previous.size()), next(n);
+    for (std::size_t k = 0; k < previous.size(); ++k) prev[k] = {previous.candidates_[k], previous.slot_[k]};
+    for (std::size_t k = 0; k < n; ++k) next[k] = {candidates_[k], slot_[k]};
+    if (!std::is_sorted(prev.begin(), prev.end())) std::sort(prev.begin(), prev.end());
+    if (!std::is_sorted(next.begin(), next.end())) std::sort(next.begin(), next.end());
+    for (std::size_t a = 0, b = 0; a < prev.size() && b < n;) {
+      if (prev[a].first < next[b].first) { ++a; continue; }
+      if (next[b].first < prev[a].first) { ++b; continue; }
+      const std::size_t i = prev[a++].second, j = next[b++].second;
+      mode_[j] = carried;
+      n_vis_[j] = previous.n_vis_[i];
+      n_ovf_[j] = previous.n_ovf_[i];
+      for (int d = 0; d < 3; ++d) f_[d][j] = previous.f_[d][i], arg_[d][j] = previous.arg_[d][i];
+    }
+    views_ = previous.views_;
+    count_modes();
+  }
+  void change_view(const Camera& cam, const Mask* old_mask, const Mask* new_mask, std::uint16_t view) {
+    if (mode_.empty()) throw Error("change_view needs carry first", "BoundaryRefinement");
+    if (completing_) throw Error("change_view after complete_view", "BoundaryRefinement");
+    auto is_carried = [&](std::size_t k) { return mode_[k] != fresh; };
+    if (old_mask) {
+      check_view(cam, *old_mask, view);
+      if (views_ == 0) throw Error("change_view takes back a view that was never added", "view '" + cam.name + "'");
+      --views_;
+      tiles_.build(*old_mask);
+      observe_view(cam, *old_mask, true, is_carried, [&](std::size_t k, const AbrObservation& obs) {
+        --n_vis_[k];
+        if (obs.overflow) --n_ovf_[k];
+        for (int d = 0; d < 3; ++d)
+          if (arg_[d][k] == view) mode_[k] = stale;  // this view set a minimum
+      });
+    }
+    if (new_mask) {
+      check_view(cam, *new_mask, view);
+      if (views_ == std::numeric_limits<std::uint16_t>::max())
+        throw Error("more than 65535 views for ABR", "view '" + cam.name + "'");
+      ++views_;
+      tiles_.build(*new_mask);
+      observe_view(cam, *new_mask, true, is_carried, [&](std::size_t k, const AbrObservation& obs) {
+        add(k, obs, view);
+      });
+    }
+    count_modes();
+  }
+  // True while some candidate still needs complete_view (fresh ones, or marked minima).
+  bool incomplete() const noexcept { return wanted_ > 0; }
+  void complete_view(const Camera& cam, const Mask& mask, std::uint16_t view) {
+    if (mode_.empty()) throw Error("complete_view needs carry first", "BoundaryRefinement");
+    check_view(cam, mask, view);
+    if (!completing_) {  // marked minima start again from no view
+      for (std::size_t k = 0; k < size(); ++k)
+        if (mode_[k] == stale)
+          for (int d = 0; d < 3; ++d) f_[d][k] = std::numeric_limits<float>::infinity(), arg_[d][k] = no_view;
+      completing_ = true;
+    }
+    if (wanted_ == 0) return;
+    // Few candidates (under one per 256 pixels): observed one by one, building the mask tiles
+    // would cost more than they save (same result either way).
+    const bool tiles = wanted_ * 256 >= static_cast<std::size_t>(mask.pixels());
+    if (tiles) tiles_.build(mask);
+    observe_view(cam, mask, tiles, [&](std::size_t k) { return mode_[k] != carried; },
+                 [&](std::size_t k, const AbrObservation& obs) {
+                   if (mode_[k] == fresh) return add(k, obs, view);
+                   if (obs.overflow) min_into(k, obs, view);  // stale: its counts are already right
+                 });
+  }
+  // Candidates carried / fresh / with minima to recompute (after carry and change_view).
+  std::array<std::size_t, 3> carried_fresh_stale() const {
+    std::array<std::size_t, 3> c{};
+    for (std::uint8_t m : mode_) ++c[m];
+    if (mode_.empty()) c[0] = size();
+    return c;
   }
 
   // Gate gamma > rho (strict), clamp the per-axis minimum to [f_min, 1], log s_d += log f (Eq. 14).
@@ -295,10 +358,83 @@ class BoundaryRefinement {
 
   // Bytes of state held per candidate (index, geometry copy, counters, running minima).
   static constexpr std::size_t bytes_per_candidate() {
-    return 2 * sizeof(std::uint32_t) + (3 + 9 + 3 + 3) * sizeof(float) + 2 * sizeof(std::uint16_t) + 3 * sizeof(float);
+    return 2 * sizeof(std::uint32_t) + (3 + 9 + 3 + 3) * sizeof(float) + 2 * sizeof(std::uint16_t) + 3 * sizeof(float) +
+           3 * sizeof(std::uint16_t);
   }
 
  private:
+  static constexpr std::uint16_t no_view = std::numeric_limits<std::uint16_t>::max();
+  enum : std::uint8_t { carried = 0, fresh = 1, stale = 2 };
+
+  void check_view(const Camera& cam, const Mask& mask, std::uint16_t view) const {
+    const std::string where = "view '" + cam.name + "'";
+    cam.validate();
+    if (mask.width != cam.width || mask.height != cam.height || mask.channels != 1 ||
+        mask.data.size() != mask.pixels())
+      throw Error("mask is " + std::to_string(mask.width) + "x" + std::to_string(mask.height) + "x" +
+                  std::to_string(mask.channels) + ", the view is " + std::to_string(cam.width) + "x" +
+                  std::to_string(cam.height) + "x1", where);
+    if (view == no_view) throw Error("view ids go up to 65534", where);
+  }
+
+  // Slot k's observation in view `view` enters its counts and minima (B.3).
+  void add(std::size_t k, const AbrObservation& obs, std::uint16_t view) {
+    ++n_vis_[k];
+    if (!obs.overflow) return;
+    ++n_ovf_[k];
+    min_into(k, obs, view);
+  }
+  // Multi-view minimum per axis (B.3), remembering the view that set it.
+  void min_into(std::size_t k, const AbrObservation& obs, std::uint16_t view) {
+    for (int d = 0; d < 3; ++d)
+      if (obs.f[d] < f_[d][k]) f_[d][k] = obs.f[d], arg_[d][k] = view;
+  }
+  void count_modes() {
+    wanted_ = 0;
+    for (std::uint8_t m : mode_) wanted_ += m != carried;
+  }
+
+  // One view: apply(k, obs) for every slot k with want(k) whose centre is eligible (B.1), obs as
+  // observe_gaussian gives it. With `tiles` (tiles_ built from this mask) whole chunks and
+  // single Gaussians that the mask's tiles decide skip the covariance (same counts and minima).
+  template <class Want, class Apply>
+  void observe_view(const Camera& cam, const Mask& mask, bool tiles, Want want, Apply apply) {
+    const AbrParams p = params_;
+    AbrObservation inside;  // eligible, no endpoint outside, no factor
+    inside.eligible = true;
+    const detail::MeanProjection P = detail::MeanProjection::from(cam);
+    parallel_chunks(static_cast<std::int64_t>(box_.size()), kChunk / kBox, [&](std::int64_t, std::int64_t b, std::int64_t e) {
+      for (std::int64_t c = b; c < e; ++c) {
+        const std::size_t j0 = static_cast<std::size_t>(c) * kBox, j1 = std::min(size(), j0 + kBox);
+        bool any = false;
+        for (std::size_t k = j0; k < j1 && !any; ++k) any = want(k);
+        if (!any) continue;
+        switch (tiles ? chunk_content(P, cam, box_[c], p) : MaskTiles::mixed) {
+          case MaskTiles::background: continue;  // no centre on foreground: none eligible (B.1)
+          case MaskTiles::foreground:            // every centre and endpoint on foreground
+            for (std::size_t k = j0; k < j1; ++k)
+              if (want(k)) apply(k, inside);
+            continue;
+          case MaskTiles::mixed: break;
+        }
+        for (std::size_t k = j0; k < j1; ++k) {
+          if (!want(k)) continue;
+          const Eigen::Vector3f mu(mu_[0][k], mu_[1][k], mu_[2][k]);
+          switch (tiles ? gaussian_content(cam, mu, max_scale_squared(k), p) : MaskTiles::mixed) {
+            case MaskTiles::background: continue;                   // not eligible (B.1)
+            case MaskTiles::foreground: apply(k, inside); continue;  // eligible, no endpoint outside
+            case MaskTiles::mixed: break;
+          }
+          Eigen::Matrix3f R;
+          for (int q = 0; q < 9; ++q) R(q % 3, q / 3) = rot_[q][k];
+          const Eigen::Vector3f s(s_[0][k], s_[1][k], s_[2][k]);
+          const AbrObservation obs = observe_gaussian(cam, mask, mu, R, s, p);
+          if (obs.eligible) apply(k, obs);
+        }
+      }
+    });
+  }
+
   // max_d s_d^2 of slot j: the largest eigenvalue of its 3D covariance R S^2 R^T; +inf when a
   // scale is not finite (no fast path).
   float max_scale_squared(std::size_t j) const {
@@ -379,6 +515,10 @@ class BoundaryRefinement {
   LogScales log_s_;                          // candidate log-scales before refinement (by slot)
   std::array<std::vector<float>, 3> f_;      // running minimum candidate factor per axis
   std::vector<std::uint16_t> n_vis_, n_ovf_;  // B.3 counts
+  std::array<std::vector<std::uint16_t>, 3> arg_;  // the view that set f_ (incremental updates)
+  std::vector<std::uint8_t> mode_;           // carried / fresh / stale, after carry
+  std::size_t wanted_ = 0;                   // slots not carried clean
+  bool completing_ = false;                  // complete_view has started
   std::size_t views_ = 0;
 };
 

@@ -9,10 +9,18 @@
 // renderer and a segmenter, which vcar::segment has) and runs ABR (Eq. 9-14) on the views with
 // masks. The result equals vcar::segment's with the same masks and SSS off.
 //
-// State: the voter (Morton-sorted means and counters, ~20 bytes per Gaussian) and the masks
-// run-length encoded (O(boundary) bytes each). The vote is the paper's (Eq. 1-3): parameters
+// ABR is incremental too (BoundaryRefinement::carry): select() keeps the refinement it ran, and
+// the next select() carries the state of the Gaussians both selections hold, takes back and
+// re-adds only the views whose masks changed, and observes every view only for the Gaussians
+// that entered the selection (or whose minimum factor came from a changed view). When more than
+// half the views changed it refines from scratch. Either way the result is the same, bit for bit.
+//
+// State: the voter (Morton-sorted means and counters, ~20 bytes per Gaussian), the masks
+// run-length encoded (O(boundary) bytes each) and the last refinement (~90 bytes per selected
+// Gaussian). The vote is the paper's (Eq. 1-3): parameters
 // whose vote needs renders (edge band, occlusion tests, keep_unseen) are refused.
 #include <cstddef>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -22,11 +30,21 @@
 
 namespace vcar {
 
+// What the latest Reselection::select() did in ABR.
+struct ReselectionStats {
+  bool abr_incremental = false;  // started from the previous select()'s refinement
+  std::size_t views_changed = 0; // views whose mask changed since then (set, replaced, cleared)
+  std::size_t carried = 0;       // selected Gaussians whose state was carried over
+  std::size_t fresh = 0;         // selected Gaussians observed in every view (new in the selection)
+  std::size_t stale = 0;         // carried Gaussians whose minimum factor was recomputed
+};
+
 class Reselection {
 public:
   // The scene is referenced (it must outlive this object); cameras and params are copied.
   Reselection(const GaussianScene& scene, std::vector<Camera> cameras, VcarParams params = VcarParams::nvos())
-      : scene_(&scene), cameras_(std::move(cameras)), params_(params), vote_(scene), masks_(cameras_.size()) {
+      : scene_(&scene), cameras_(std::move(cameras)), params_(params), vote_(scene), masks_(cameras_.size()),
+        abr_masks_(cameras_.size()) {
     params_.validate();
     if (params_.robust_vote())
       throw Error("re-selection votes with Eq. 1-3 only; edge_band, coarse/fine_occlusion and keep_unseen need "
@@ -34,6 +52,7 @@ public:
     if (params_.occlusion_aware) throw Error("occlusion_aware needs renders (use vcar::segment)", "Reselection");
     if (scene.empty()) throw Error("the scene has no Gaussians", "scene");
     if (cameras_.empty()) throw Error("no training cameras", "cameras");
+    if (cameras_.size() >= 65535) throw Error("more than 65534 views", "Reselection");
     for (const Camera& c : cameras_) c.validate();
   }
 
@@ -61,11 +80,11 @@ public:
     }
     if (!mask) return;
     vote_.add_view(cam, mask);
-    masks_[view] = RleMask::encode(*mask);
+    masks_[view] = std::make_shared<const RleMask>(RleMask::encode(*mask));
   }
 
   // The selection for the masks set so far (reference view: the sphere's fallback centre, A.1).
-  SegmentationResult select(std::size_t reference_view = 0) const {
+  SegmentationResult select(std::size_t reference_view = 0) {
     if (reference_view >= cameras_.size())
       throw Error("reference view " + std::to_string(reference_view) + " out of range", "Reselection");
     const auto t0 = detail::Clock::now();
@@ -87,7 +106,7 @@ public:
         diag.note = "the views leave a gap of " + std::to_string(gap.Delta_max_deg) +
                     " degrees: vcar::segment would add sampled views (SSS), re-selection does not";
     }
-    result.log_scale = detail::refine_boundaries(*scene_, selected, cameras_, masks_, params_, diag);
+    result.log_scale = refine(selected, diag);
     result.scores.reserve(selected.size());
     for (Index i : selected) result.scores.push_back(vote_.ratio_of(i));
     result.indices = std::move(selected);
@@ -95,13 +114,74 @@ public:
     return result;
   }
 
+  // What the latest select() did in ABR.
+  const ReselectionStats& last_stats() const noexcept { return stats_; }
+  // Off: every select() refines from scratch (same result; for ablations and benchmarks).
+  void set_incremental_abr(bool on) noexcept { incremental_abr_ = on; }
+
 private:
+  using MaskRef = std::shared_ptr<const RleMask>;
+
+  // ABR (Eq. 9-14) of `selected` on the views with masks, from the previous refinement when
+  // few views changed (see the top of this file). Fills diag like detail::refine_boundaries.
+  LogScales refine(const std::vector<Index>& selected, Diagnostics& diag) {
+    stats_ = {};
+    if (!params_.enable_abr) {
+      abr_.reset();
+      return detail::refine_boundaries(*scene_, selected, cameras_, {}, params_, diag);
+    }
+    const auto ta = detail::Clock::now();
+    std::vector<std::size_t> changed, with_mask;
+    diag.mask_store_bytes = 0;
+    for (std::size_t j = 0; j < cameras_.size(); ++j) {
+      if (masks_[j] != abr_masks_[j]) changed.push_back(j);
+      if (masks_[j]) with_mask.push_back(j), diag.mask_store_bytes += masks_[j]->bytes();
+    }
+    stats_.views_changed = changed.size();
+    BoundaryRefinement abr(*scene_, selected, params_.abr());
+    auto view_id = [](std::size_t j) { return static_cast<std::uint16_t>(j); };
+    if (incremental_abr_ && abr_ && 2 * changed.size() < std::max<std::size_t>(with_mask.size(), 1)) {
+      stats_.abr_incremental = true;
+      abr.carry(*abr_);
+      Mask old_mask;
+      for (std::size_t j : changed) {
+        if (abr_masks_[j]) abr_masks_[j]->decode(old_mask);
+        if (masks_[j]) masks_[j]->decode(scratch_);
+        abr.change_view(cameras_[j], abr_masks_[j] ? &old_mask : nullptr, masks_[j] ? &scratch_ : nullptr, view_id(j));
+      }
+      const auto cfs = abr.carried_fresh_stale();
+      stats_.carried = cfs[0] + cfs[2], stats_.fresh = cfs[1], stats_.stale = cfs[2];
+      if (abr.incomplete())
+        for (std::size_t j : with_mask) {
+          masks_[j]->decode(scratch_);
+          abr.complete_view(cameras_[j], scratch_, view_id(j));
+        }
+    } else {
+      stats_.fresh = selected.size();
+      for (std::size_t j : with_mask) {
+        masks_[j]->decode(scratch_);
+        abr.add_view(cameras_[j], scratch_, view_id(j));
+      }
+    }
+    AbrResult a = abr.finish();
+    abr_.emplace(std::move(abr));
+    abr_masks_ = masks_;
+    diag.abr_flagged = a.flagged;
+    diag.abr_compressed = a.compressed;
+    diag.timings_s.emplace_back("abr", detail::seconds_since(ta));
+    return std::move(a.log_scale);
+  }
+
   const GaussianScene* scene_;
   std::vector<Camera> cameras_;
   VcarParams params_;
   VisibilityVoting vote_;
-  std::vector<std::optional<RleMask>> masks_;  // the masks set, run-length encoded
-  mutable Mask scratch_;
+  std::vector<MaskRef> masks_;      // the masks set, run-length encoded (shared, never changed)
+  std::vector<MaskRef> abr_masks_;  // the masks that abr_ saw
+  std::optional<BoundaryRefinement> abr_;  // the latest select()'s refinement
+  ReselectionStats stats_;
+  bool incremental_abr_ = true;
+  Mask scratch_;
 };
 
 }  // namespace vcar
