@@ -133,35 +133,47 @@ struct AbrObservation {
                          std::numeric_limits<float>::infinity()};
 };
 
-// One Gaussian (mean mu, rotation R with columns r_d, scales s) in one view with its mask.
-// Assumes mask is camera-sized (checked where views enter, BoundaryRefinement::add_view).
-inline AbrObservation observe_gaussian(const Camera& cam, const Mask& mask, const Eigen::Vector3f& mu,
-                                       const Eigen::Matrix3f& R, const Eigen::Vector3f& s,
-                                       const AbrParams& p) {
+// One eligible-looking Gaussian in one view: centre m (on foreground), perspective Jacobian J at
+// its camera-space mean, rotation R with columns r_d, scales s. The covariance (Eq. 10), the
+// 3-sigma endpoints (Eq. 9) and, for each endpoint outside the mask, Eq. 11-13 (B.3).
+inline AbrObservation observe_projected(const Camera& cam, const Mask& mask, const Eigen::Vector2f& m,
+                                        const Eigen::Matrix<float, 2, 3>& J, const Eigen::Matrix3f& R,
+                                        const Eigen::Vector3f& s, const AbrParams& p) {
   AbrObservation obs;
-  // Eligibility first (rule (b), B.1): most Gaussian-views that fail it skip the covariance.
-  const Eigen::Vector3f t = cam.to_camera(mu);
-  if (!(t.z() >= p.projection.near_plane && t.z() <= p.projection.far_plane)) return obs;
-  if (!mask_at(mask, cam.fx * t.x() / t.z() + cam.cx, cam.fy * t.y() / t.z() + cam.cy)) return obs;
-  const ProjectedGaussian g = project_gaussian(cam, mu, R, s, 1.f, p.projection);  // rule (e)
-  if (!g.valid || !mask_at(mask, g.mean.x(), g.mean.y())) return obs;  // same m, Sigma2D degenerate
+  std::array<Eigen::Vector2f, 3> q;
+  const Eigen::Matrix2f S = project_covariance(cam, J, R, s, p.projection.eps2d, q);
+  const float det = S(0, 0) * S(1, 1) - S(0, 1) * S(0, 1);
+  if (!(det > 0.f) || !(1.f >= p.projection.alpha_min)) return obs;  // degenerate: as project_gaussian, rule (e)
   obs.eligible = true;
-  const SymmetricEigen2 E = symmetric_eigen2(g.Sigma2D);
+  const SymmetricEigen2 E = symmetric_eigen2(S);
   const float lambdas[2] = {std::max(E.lambda1, 0.f), std::max(E.lambda2, 0.f)};
   const Eigen::Vector2f axes[2] = {E.e1, E.e2};
   for (int k = 0; k < 4; ++k) {  // endpoints m +- a e1, m +- b e2 (Eq. 9)
     const float lambda = lambdas[k >> 1];
     const Eigen::Vector2f u = (k & 1) ? Eigen::Vector2f(-axes[k >> 1]) : axes[k >> 1];
     const float L = p.sigma_c * std::sqrt(lambda);  // a or b
-    if (mask_at(mask, g.mean.x() + L * u.x(), g.mean.y() + L * u.y())) continue;
+    if (mask_at(mask, m.x() + L * u.x(), m.y() + L * u.y())) continue;
     obs.overflow = true;
-    const std::array<float, 3> w = axis_contributions(g.q, s, u);  // Eq. 11
+    const std::array<float, 3> w = axis_contributions(q, s, u);  // Eq. 11
     const int d_star = w[1] > w[0] ? (w[2] > w[1] ? 2 : 1) : (w[2] > w[0] ? 2 : 0);  // d* = argmax w_d (Eq. 11)
-    const float l_u = boundary_distance(mask, g.mean, u, L, p.boundary_samples);  // B.3
+    const float l_u = boundary_distance(mask, m, u, L, p.boundary_samples);  // B.3
     const float f = compression_factor(l_u, lambda, w, d_star, p);  // Eq. 13
     obs.f[d_star] = std::min(obs.f[d_star], f);
   }
   return obs;
+}
+
+// One Gaussian (mean mu, rotation R with columns r_d, scales s) in one view with its mask.
+// Assumes mask is camera-sized (checked where views enter, BoundaryRefinement::add_view).
+inline AbrObservation observe_gaussian(const Camera& cam, const Mask& mask, const Eigen::Vector3f& mu,
+                                       const Eigen::Matrix3f& R, const Eigen::Vector3f& s,
+                                       const AbrParams& p) {
+  // Eligibility first (rule (b), B.1): most Gaussian-views that fail it skip the covariance.
+  const Eigen::Vector3f t = cam.to_camera(mu);
+  if (!(t.z() >= p.projection.near_plane && t.z() <= p.projection.far_plane)) return {};  // rule (e)
+  const Eigen::Vector2f m(cam.fx * t.x() / t.z() + cam.cx, cam.fy * t.y() / t.z() + cam.cy);
+  if (!mask_at(mask, m.x(), m.y())) return {};
+  return observe_projected(cam, mask, m, perspective_jacobian(cam, t, p.projection.frustum_margin), R, s, p);
 }
 
 class BoundaryRefinement {
@@ -419,16 +431,20 @@ class BoundaryRefinement {
         }
         for (std::size_t k = j0; k < j1; ++k) {
           if (!want(k)) continue;
-          const Eigen::Vector3f mu(mu_[0][k], mu_[1][k], mu_[2][k]);
-          switch (tiles ? gaussian_content(cam, mu, max_scale_squared(k), p) : MaskTiles::mixed) {
-            case MaskTiles::background: continue;                   // not eligible (B.1)
-            case MaskTiles::foreground: apply(k, inside); continue;  // eligible, no endpoint outside
-            case MaskTiles::mixed: break;
+          // observe_gaussian, with the mask tiles' shortcut between eligibility and covariance.
+          const Eigen::Vector3f t = cam.to_camera(Eigen::Vector3f(mu_[0][k], mu_[1][k], mu_[2][k]));
+          if (!(t.z() >= p.projection.near_plane && t.z() <= p.projection.far_plane)) continue;  // rule (e)
+          const Eigen::Vector2f m(cam.fx * t.x() / t.z() + cam.cx, cam.fy * t.y() / t.z() + cam.cy);
+          if (!mask_at(mask, m.x(), m.y())) continue;  // not eligible (B.1)
+          const Eigen::Matrix<float, 2, 3> J = perspective_jacobian(cam, t, p.projection.frustum_margin);
+          if (tiles && reach_on_foreground(cam, J, m, max_scale_squared(k), p)) {
+            apply(k, inside);  // eligible, no endpoint outside
+            continue;
           }
           Eigen::Matrix3f R;
           for (int q = 0; q < 9; ++q) R(q % 3, q / 3) = rot_[q][k];
           const Eigen::Vector3f s(s_[0][k], s_[1][k], s_[2][k]);
-          const AbrObservation obs = observe_gaussian(cam, mask, mu, R, s, p);
+          const AbrObservation obs = observe_projected(cam, mask, m, J, R, s, p);
           if (obs.eligible) apply(k, obs);
         }
       }
@@ -476,30 +492,23 @@ class BoundaryRefinement {
                                                                                             : MaskTiles::mixed;
   }
 
-  // The same decision for one Gaussian (largest squared scale s2max): background when its
-  // centre is not eligible (B.1, the test observe_gaussian starts with); foreground when every
-  // pixel within sigma_c sqrt(lambda_1) of the centre is foreground inside the image, with
-  // lambda_1 <= ||J||^2 s2max + eps2d (Eq. 10: J R_w Sigma R_w^T J^T + eps2d I); else mixed.
-  MaskTiles::Content gaussian_content(const Camera& cam, const Eigen::Vector3f& mu, float s2max,
-                                      const AbrParams& p) const {
-    const Eigen::Vector3f t = cam.to_camera(mu);
-    if (!(t.z() >= p.projection.near_plane && t.z() <= p.projection.far_plane)) return MaskTiles::background;
-    const float u = cam.fx * t.x() / t.z() + cam.cx, v = cam.fy * t.y() / t.z() + cam.cy;
-    if (!(u >= 0.f && v >= 0.f && u < static_cast<float>(cam.width) && v < static_cast<float>(cam.height)))
-      return MaskTiles::background;  // mask_at is 0 outside the image
-    const int px = static_cast<int>(u), py = static_cast<int>(v);
-    if (!(p.projection.eps2d > 0.f) || !(s2max < 1e30f)) return MaskTiles::mixed;
-    // ||J||^2 = largest eigenvalue of J J^T (J of perspective_jacobian, clamped tx/z, ty/z).
-    const Eigen::Matrix<float, 2, 3> J = perspective_jacobian(cam, t, p.projection.frustum_margin);
+  // The same decision for one Gaussian whose centre m is on foreground (largest squared scale
+  // s2max, Jacobian J at its mean): true when every pixel within sigma_c sqrt(lambda_1) of the
+  // centre is foreground inside the image, with lambda_1 <= ||J||^2 s2max + eps2d (Eq. 10:
+  // J R_w Sigma R_w^T J^T + eps2d I), so no endpoint overflows.
+  bool reach_on_foreground(const Camera& cam, const Eigen::Matrix<float, 2, 3>& J, const Eigen::Vector2f& m,
+                           float s2max, const AbrParams& p) const {
+    if (!(p.projection.eps2d > 0.f) || !(s2max < 1e30f)) return false;
+    // ||J||^2 = largest eigenvalue of J J^T.
     const Eigen::Matrix2f JJ = J * J.transpose();
     const float mean = 0.5f * (JJ(0, 0) + JJ(1, 1)), diff = 0.5f * (JJ(0, 0) - JJ(1, 1));
     const float jmax = mean + std::sqrt(diff * diff + JJ(0, 1) * JJ(0, 1));
     const float reach = p.sigma_c * std::sqrt(jmax * s2max + p.projection.eps2d) * 1.001f + 1.f;
-    if (!(reach < 1e6f)) return MaskTiles::mixed;
+    if (!(reach < 1e6f)) return false;
     const int r = static_cast<int>(std::ceil(reach));
-    if (px - r < 0 || py - r < 0 || px + r >= cam.width || py + r >= cam.height) return MaskTiles::mixed;
-    return tiles_.classify(px - r, py - r, px + r, py + r) == MaskTiles::foreground ? MaskTiles::foreground
-                                                                                    : MaskTiles::mixed;
+    const int px = static_cast<int>(m.x()), py = static_cast<int>(m.y());
+    if (px - r < 0 || py - r < 0 || px + r >= cam.width || py + r >= cam.height) return false;
+    return tiles_.classify(px - r, py - r, px + r, py + r) == MaskTiles::foreground;
   }
 
   static constexpr std::size_t kBox = 64;  // slots per chunk box

@@ -50,6 +50,24 @@ inline Eigen::Matrix<float, 2, 3> perspective_jacobian(const Camera& cam, const 
   return J;
 }
 
+// Sigma2D = sum_d s_d^2 q_d q_d^T + eps2d I (Eq. 10, B.7) with q_d = M r_d, M = J R_w, from the
+// perspective Jacobian J at the camera-space mean. Writes q and returns Sigma2D (exactly
+// symmetric). project_gaussian's covariance; ABR calls it with the J it already has.
+inline Eigen::Matrix2f project_covariance(const Camera& cam, const Eigen::Matrix<float, 2, 3>& J,
+                                          const Eigen::Matrix3f& R, const Eigen::Vector3f& s, float eps2d,
+                                          std::array<Eigen::Vector2f, 3>& q) {
+  const Eigen::Matrix<float, 2, 3> M = J * cam.R_w;
+  Eigen::Matrix2f S = Eigen::Matrix2f::Zero();
+  for (int d = 0; d < 3; ++d) {
+    q[d] = M * R.col(d);                                // q_d = M r_d (B.7)
+    S.noalias() += (s[d] * s[d]) * q[d] * q[d].transpose();  // sum_d s_d^2 q_d q_d^T (Eq. 10)
+  }
+  S(0, 0) += eps2d;
+  S(1, 1) += eps2d;
+  S(1, 0) = S(0, 1);  // exact symmetry
+  return S;
+}
+
 // Projects a Gaussian with mean mu, rotation R (columns r_d), scales s and opacity.
 inline ProjectedGaussian project_gaussian(const Camera& cam, const Eigen::Vector3f& mu,
                                           const Eigen::Matrix3f& R, const Eigen::Vector3f& s,
@@ -59,15 +77,7 @@ inline ProjectedGaussian project_gaussian(const Camera& cam, const Eigen::Vector
   g.depth = t.z();
   if (!(t.z() >= p.near_plane && t.z() <= p.far_plane)) return g;
   g.mean = {cam.fx * t.x() / t.z() + cam.cx, cam.fy * t.y() / t.z() + cam.cy};
-  const Eigen::Matrix<float, 2, 3> M = perspective_jacobian(cam, t, p.frustum_margin) * cam.R_w;
-  Eigen::Matrix2f S = Eigen::Matrix2f::Zero();
-  for (int d = 0; d < 3; ++d) {
-    g.q[d] = M * R.col(d);                                // q_d = M r_d (B.7)
-    S.noalias() += (s[d] * s[d]) * g.q[d] * g.q[d].transpose();  // sum_d s_d^2 q_d q_d^T (Eq. 10)
-  }
-  S(0, 0) += p.eps2d;
-  S(1, 1) += p.eps2d;
-  S(1, 0) = S(0, 1);  // exact symmetry
+  const Eigen::Matrix2f S = project_covariance(cam, perspective_jacobian(cam, t, p.frustum_margin), R, s, p.eps2d, g.q);
   g.Sigma2D = S;
   const float det = S(0, 0) * S(1, 1) - S(0, 1) * S(0, 1);
   if (!(det > 0.f) || !(opacity >= p.alpha_min)) return g;
