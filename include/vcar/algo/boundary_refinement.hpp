@@ -311,9 +311,12 @@ class BoundaryRefinement {
     if (mode_.empty()) throw Error("complete_view needs carry first", "BoundaryRefinement");
     check_view(cam, mask, view);
     if (!completing_) {  // marked minima start again from no view
-      for (std::size_t k = 0; k < size(); ++k)
+      for (std::size_t k = 0; k < size(); ++k) {
         if (mode_[k] == stale)
           for (int d = 0; d < 3; ++d) f_[d][k] = std::numeric_limits<float>::infinity(), arg_[d][k] = no_view;
+        if (mode_[k] != carried && (wanted_boxes_.empty() || wanted_boxes_.back() != k / kBox))
+          wanted_boxes_.push_back(static_cast<std::uint32_t>(k / kBox));
+      }
       completing_ = true;
     }
     if (wanted_ == 0) return;
@@ -325,7 +328,7 @@ class BoundaryRefinement {
                  [&](std::size_t k, const AbrObservation& obs) {
                    if (mode_[k] == fresh) return add(k, obs, view);
                    if (obs.overflow) min_into(k, obs, view);  // stale: its counts are already right
-                 });
+                 }, &wanted_boxes_);
   }
   // Candidates carried / fresh / with minima to recompute (after carry and change_view).
   std::array<std::size_t, 3> carried_fresh_stale() const {
@@ -409,15 +412,19 @@ class BoundaryRefinement {
   // One view: apply(k, obs) for every slot k with want(k) whose centre is eligible (B.1), obs as
   // observe_gaussian gives it. With `tiles` (tiles_ built from this mask) whole chunks and
   // single Gaussians that the mask's tiles decide skip the covariance (same counts and minima).
+  // `boxes` (optional) lists the chunk boxes that hold a wanted slot; the others are skipped.
   template <class Want, class Apply>
-  void observe_view(const Camera& cam, const Mask& mask, bool tiles, Want want, Apply apply) {
+  void observe_view(const Camera& cam, const Mask& mask, bool tiles, Want want, Apply apply,
+                    const std::vector<std::uint32_t>* boxes = nullptr) {
     const AbrParams p = params_;
     AbrObservation inside;  // eligible, no endpoint outside, no factor
     inside.eligible = true;
     const detail::MeanProjection P = detail::MeanProjection::from(cam);
-    parallel_chunks(static_cast<std::int64_t>(box_.size()), kChunk / kBox, [&](std::int64_t, std::int64_t b, std::int64_t e) {
-      for (std::int64_t c = b; c < e; ++c) {
-        const std::size_t j0 = static_cast<std::size_t>(c) * kBox, j1 = std::min(size(), j0 + kBox);
+    const std::int64_t n_boxes = static_cast<std::int64_t>(boxes ? boxes->size() : box_.size());
+    parallel_chunks(n_boxes, kChunk / kBox, [&](std::int64_t, std::int64_t b, std::int64_t e) {
+      for (std::int64_t i = b; i < e; ++i) {
+        const std::size_t c = boxes ? (*boxes)[static_cast<std::size_t>(i)] : static_cast<std::size_t>(i);
+        const std::size_t j0 = c * kBox, j1 = std::min(size(), j0 + kBox);
         bool any = false;
         for (std::size_t k = j0; k < j1 && !any; ++k) any = want(k);
         if (!any) continue;
@@ -528,6 +535,7 @@ class BoundaryRefinement {
   std::vector<std::uint8_t> mode_;           // carried / fresh / stale, after carry
   std::size_t wanted_ = 0;                   // slots not carried clean
   bool completing_ = false;                  // complete_view has started
+  std::vector<std::uint32_t> wanted_boxes_;  // chunk boxes with fresh or stale slots (completion)
   std::size_t views_ = 0;
 };
 
