@@ -149,6 +149,7 @@ void register_scene(py::module_& m);
 void register_cameras(py::module_& m);
 void register_params(py::module_& m);
 void register_segment(py::module_& m);
+void register_reselection(py::module_& m);
 void register_stages(py::module_& m);
 void register_synth(py::module_& m, py::module_& synth, py::module_& eval);
 

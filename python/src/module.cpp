@@ -9,6 +9,7 @@ PYBIND11_MODULE(_vcar, m) {
   vp::register_cameras(m);
   vp::register_params(m);
   vp::register_segment(m);
+  vp::register_reselection(m);
   vp::register_stages(m);
   auto synth = m.def_submodule("synth", "The synthetic world with exact ground truth, rigs, the oracle segmenter.");
   auto eval = m.def_submodule("eval", "The metrics of conventions §6.");

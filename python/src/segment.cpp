@@ -9,6 +9,7 @@
 
 #include "common.hpp"
 #include "params.hpp"
+#include "result.hpp"
 #include "segmenters.hpp"
 #include "vcar/algo/pipeline.hpp"
 #include "vcar/backends/cpu/tiled_renderer.hpp"
@@ -236,45 +237,6 @@ Prompt prompt_from(py::handle obj, const std::vector<Camera>& cams, py::dict& no
   return p;
 }
 
-py::dict result_dict(SegmentationResult&& r, const VcarParams& params) {
-  const auto m = static_cast<py::ssize_t>(r.indices.size());
-  py::dict out;
-  out["indices"] = index_array(r.indices);
-  py::array_t<float> ls({m, py::ssize_t{3}});
-  for (py::ssize_t k = 0; k < m; ++k)
-    for (int d = 0; d < 3; ++d) ls.mutable_data()[k * 3 + d] = r.log_scale[d].empty() ? 0.f : r.log_scale[d][k];
-  r.scores.resize(static_cast<std::size_t>(m));
-  out["scores"] = adopt(std::move(r.scores), {m});
-  out["log_scales"] = ls;
-  const Diagnostics& g = r.diagnostics;
-  py::dict d;
-  d["n_scene"] = g.n_scene;
-  d["n_coarse"] = g.n_coarse;
-  d["n_fine"] = g.n_fine;
-  d["n_final"] = g.n_final;
-  d["valid_cameras"] = g.valid_cameras;
-  d["max_gap_deg"] = g.max_gap_deg;
-  d["gap_direction"] = vec3_array(g.gap_direction);
-  d["sss_triggered"] = g.sss_triggered;
-  d["sampled_cameras"] = camera_list(g.sampled_cameras);
-  py::dict sphere;
-  sphere["center"] = vec3_array(g.sphere.c);
-  sphere["radius"] = g.sphere.r;
-  sphere["inliers"] = g.sphere.inliers;
-  d["sphere"] = sphere;
-  d["abr_flagged"] = g.abr_flagged;
-  d["abr_compressed"] = g.abr_compressed;
-  d["masks_missing"] = g.masks_missing;
-  d["mask_store_bytes"] = g.mask_store_bytes;
-  d["note"] = g.note;
-  py::dict t;
-  for (const auto& [stage, s] : g.timings_s) t[py::str(stage)] = s;
-  d["timings_s"] = t;
-  d["params"] = params_dict(params);
-  out["diagnostics"] = d;
-  return out;
-}
-
 py::dict segment(py::object scene_obj, py::object cameras, py::object prompt, py::object segmenter,
                  py::object renderer, py::object params, py::object progress) {
   Scene& scene = scene_from(scene_obj);
@@ -336,6 +298,45 @@ py::dict segment(py::object scene_obj, py::object cameras, py::object prompt, py
 }
 
 }  // namespace
+
+py::dict result_dict(SegmentationResult&& r, const VcarParams& params) {
+  const auto m = static_cast<py::ssize_t>(r.indices.size());
+  py::dict out;
+  out["indices"] = index_array(r.indices);
+  py::array_t<float> ls({m, py::ssize_t{3}});
+  for (py::ssize_t k = 0; k < m; ++k)
+    for (int d = 0; d < 3; ++d) ls.mutable_data()[k * 3 + d] = r.log_scale[d].empty() ? 0.f : r.log_scale[d][k];
+  r.scores.resize(static_cast<std::size_t>(m));
+  out["scores"] = adopt(std::move(r.scores), {m});
+  out["log_scales"] = ls;
+  const Diagnostics& g = r.diagnostics;
+  py::dict d;
+  d["n_scene"] = g.n_scene;
+  d["n_coarse"] = g.n_coarse;
+  d["n_fine"] = g.n_fine;
+  d["n_final"] = g.n_final;
+  d["valid_cameras"] = g.valid_cameras;
+  d["max_gap_deg"] = g.max_gap_deg;
+  d["gap_direction"] = vec3_array(g.gap_direction);
+  d["sss_triggered"] = g.sss_triggered;
+  d["sampled_cameras"] = camera_list(g.sampled_cameras);
+  py::dict sphere;
+  sphere["center"] = vec3_array(g.sphere.c);
+  sphere["radius"] = g.sphere.r;
+  sphere["inliers"] = g.sphere.inliers;
+  d["sphere"] = sphere;
+  d["abr_flagged"] = g.abr_flagged;
+  d["abr_compressed"] = g.abr_compressed;
+  d["masks_missing"] = g.masks_missing;
+  d["mask_store_bytes"] = g.mask_store_bytes;
+  d["note"] = g.note;
+  py::dict t;
+  for (const auto& [stage, s] : g.timings_s) t[py::str(stage)] = s;
+  d["timings_s"] = t;
+  d["params"] = params_dict(params);
+  out["diagnostics"] = d;
+  return out;
+}
 
 void register_segment(py::module_& m) {
   py::class_<SegmentationRequest, std::shared_ptr<SegmentationRequest>>(m, "SegmentationRequest", R"doc(

@@ -19,6 +19,7 @@ from ._vcar import (  # noqa: F401
     MaskFolderSegmenter,
     Progress,
     RenderRequest,
+    Reselection,
     Scene,
     SegmentationRequest,
     VisibilityVoting,
