@@ -475,3 +475,55 @@ TEST_CASE("incremental refinement (carry, change_view, complete_view) equals a r
   CHECK(a.flagged == b.flagged);
   CHECK(a.compressed == b.compressed);
 }
+
+TEST_CASE("expect_views skips candidates whose gate cannot open, with the same result") {
+  // The thread-count fixture: 6000 random Gaussians, 6 ring views with disc masks.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> U(-1.f, 1.f), L(-4.f, -2.f);
+  vcar::GaussianScene g;
+  const int n = 6000;
+  g.resize(n);
+  for (int i = 0; i < n; ++i)
+    g.set(i, {U(rng), U(rng), U(rng)}, {L(rng), L(rng), L(rng)}, {U(rng), U(rng), U(rng), U(rng) + 0.01f}, 0.f);
+  std::vector<vcar::Index> cand(n);
+  for (int i = 0; i < n; ++i) cand[i] = static_cast<vcar::Index>(i);
+  const vcar::Intrinsics k{160, 120, 150.f, 150.f, 80.f, 60.f};
+  std::vector<vcar::Camera> cams;
+  std::vector<vcar::Mask> masks;
+  for (int v = 0; v < 6; ++v) {
+    const float a = 1.047f * v;
+    cams.push_back(vcar::Camera::look_at({3.5f * std::cos(a), 0.5f, 3.5f * std::sin(a)}, {0, 0, 0}, {0, 1, 0}, k, "v" + std::to_string(v)));
+    vcar::Mask m(160, 120, 1, 0);
+    for (int y = 0; y < 120; ++y)
+      for (int x = 0; x < 160; ++x) m(x, y) = (x - 80) * (x - 80) + (y - 60) * (y - 60) < 40 * 40 + 10 * v ? 255 : 0;
+    masks.push_back(m);
+  }
+  vcar::AbrParams p;
+  for (float rho : {0.6f, 0.2f, 0.f}) {
+    p.rho = rho;
+    vcar::BoundaryRefinement all(g, cand, p), skipping(g, cand, p);
+    skipping.expect_views(6);
+    for (int v = 0; v < 6; ++v) {
+      all.add_view(cams[v], masks[v]);
+      skipping.add_view(cams[v], masks[v]);
+    }
+    std::size_t observed_all = 0, observed_skipping = 0;
+    for (int i = 0; i < n; ++i) {
+      observed_all += all.n_vis(i);
+      observed_skipping += skipping.n_vis(i);
+    }
+    if (rho > 0.f) CHECK(observed_skipping < observed_all);  // some candidates were skipped
+    const auto a = all.finish(), b = skipping.finish();
+    CHECK(a.flagged > 0);
+    CHECK(a.log_scale == b.log_scale);
+    CHECK(a.axis_compressed == b.axis_compressed);
+    CHECK(a.flagged == b.flagged);
+    CHECK(a.compressed == b.compressed);
+  }
+  vcar::BoundaryRefinement more(g, cand);
+  more.expect_views(1);
+  more.add_view(cams[0], masks[0]);
+  CHECK_THROWS_AS(more.add_view(cams[1], masks[1]), vcar::Error);  // more views than announced
+  vcar::BoundaryRefinement next(g, cand);
+  CHECK_THROWS_AS(next.carry(more), vcar::Error);  // partial state cannot be carried
+}

@@ -235,11 +235,33 @@ class BoundaryRefinement {
     check_view(cam, mask, view);
     if (views_ == std::numeric_limits<std::uint16_t>::max())
       throw Error("more than 65535 views for ABR", "view '" + cam.name + "'");
+    if (expected_ && views_ >= expected_)
+      throw Error("more views than expect_views announced (" + std::to_string(expected_) + ")", "view '" + cam.name + "'");
     ++views_;
     tiles_.build(mask);
-    observe_view(cam, mask, true, [](std::size_t) { return true; }, [&](std::size_t k, const AbrObservation& obs) {
-      add(k, obs, view);
-    });
+    if (!expected_) {
+      observe_view(cam, mask, true, [](std::size_t) { return true; }, [&](std::size_t k, const AbrObservation& obs) {
+        add(k, obs, view);
+      });
+      return;
+    }
+    // Views after this one: a candidate whose gate cannot open even if it overflows in all of
+    // them is not observed any more (see expect_views).
+    const std::size_t after = expected_ - views_;
+    observe_view(cam, mask, true, [&](std::size_t k) { return gate_can_open(k, after + 1); },
+                 [&](std::size_t k, const AbrObservation& obs) { add(k, obs, view); });
+  }
+
+  // Announces that exactly `total` views will be added (add_view), which lets the refinement
+  // skip a candidate once its gate (B.3: gamma = n_ovf / n_vis > rho) can no longer open: with
+  // R views to come, gamma ends at most (n_ovf + R) / (n_vis + R). finish() is unchanged (a
+  // skipped candidate is never flagged either way); n_vis, n_ovf and min_factor of a skipped
+  // candidate stay where they were, and such a refinement cannot be carried (carry throws).
+  // Call before the first view; 0 turns it off.
+  void expect_views(std::size_t total) {
+    if (views_ != 0) throw Error("expect_views is called before the first view", "BoundaryRefinement");
+    if (!mode_.empty()) throw Error("expect_views does not combine with carry", "BoundaryRefinement");
+    expected_ = total;
   }
 
   // ---- Incremental refinement (beyond the paper; used by Reselection). Eq. 9-13 observe one
@@ -257,6 +279,8 @@ class BoundaryRefinement {
   // finish() then equals a refinement that saw every current mask (tested bit for bit).
   void carry(const BoundaryRefinement& previous) {
     if (!mode_.empty()) throw Error("carry is called once, before any view", "BoundaryRefinement");
+    if (previous.expected_ || expected_)
+      throw Error("a refinement that skips candidates (expect_views) cannot be carried", "BoundaryRefinement");
     if (views_ != 0) throw Error("carry needs a refinement that has seen no view yet", "BoundaryRefinement");
     const std::size_t n = size();
     mode_.assign(n, fresh);
@@ -390,6 +414,15 @@ class BoundaryRefinement {
                   std::to_string(mask.channels) + ", the view is " + std::to_string(cam.width) + "x" +
                   std::to_string(cam.height) + "x1", where);
     if (view == no_view) throw Error("view ids go up to 65534", where);
+  }
+
+  // Whether slot k can still end with gamma > rho (B.3) when `remaining` views are to come
+  // (this one included): (n_ovf + R) / (n_vis + R) against rho, with a margin so that the
+  // float gate of finish() never decides otherwise.
+  bool gate_can_open(std::size_t k, std::size_t remaining) const {
+    const double o = static_cast<double>(n_ovf_[k]) + static_cast<double>(remaining);
+    const double v = static_cast<double>(n_vis_[k]) + static_cast<double>(remaining);
+    return !(v > 0.0) || o / v >= static_cast<double>(params_.rho) - 1e-6;
   }
 
   // Slot k's observation in view `view` enters its counts and minima (B.3).
@@ -537,6 +570,7 @@ class BoundaryRefinement {
   bool completing_ = false;                  // complete_view has started
   std::vector<std::uint32_t> wanted_boxes_;  // chunk boxes with fresh or stale slots (completion)
   std::size_t views_ = 0;
+  std::size_t expected_ = 0;                 // expect_views (0: every candidate observed in every view)
 };
 
 }  // namespace vcar

@@ -277,6 +277,9 @@ inline LogScales refine_boundaries(const GaussianScene& scene, const std::vector
   }
   const auto ta = Clock::now();
   BoundaryRefinement abr(scene, selected, params.abr());
+  std::size_t views = 0;
+  for (const auto& m : train_masks) views += m.has_value();
+  abr.expect_views(views);  // candidates whose gate can no longer open are skipped (same result)
   Mask scratch;
   diag.mask_store_bytes = 0;
   for (std::size_t j = 0; j < train_masks.size(); ++j) {
