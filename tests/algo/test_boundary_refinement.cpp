@@ -72,6 +72,39 @@ double factor(const vcar::AbrResult& r, const vcar::GaussianScene& g, int d) {
   return std::exp(static_cast<double>(r.log_scale[d][0]) - g.log_scale[d][0]);
 }
 
+// 6000 random small Gaussians in a cube seen by 6 ring views with disc masks of growing radius.
+struct RingFixture {
+  vcar::GaussianScene scene;
+  std::vector<vcar::Camera> cams;
+  std::vector<vcar::Mask> masks;
+};
+// n Gaussians with means uniform in [-1, 1]^3, log-scales uniform in [log_lo, log_hi], random rotations.
+vcar::GaussianScene random_gaussians(int n, unsigned seed, float log_lo, float log_hi) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> U(-1.f, 1.f), L(log_lo, log_hi);
+  vcar::GaussianScene g;
+  g.resize(n);
+  for (int i = 0; i < n; ++i)
+    g.set(i, {U(rng), U(rng), U(rng)}, {L(rng), L(rng), L(rng)}, {U(rng), U(rng), U(rng), U(rng) + 0.01f}, 0.f);
+  return g;
+}
+
+RingFixture ring_fixture() {
+  RingFixture f;
+  f.scene = random_gaussians(6000, 3, -4.f, -2.f);
+  const vcar::Intrinsics k{160, 120, 150.f, 150.f, 80.f, 60.f};
+  for (int v = 0; v < 6; ++v) {
+    const float a = 1.047f * v;
+    f.cams.push_back(vcar::Camera::look_at({3.5f * std::cos(a), 0.5f, 3.5f * std::sin(a)}, {0, 0, 0}, {0, 1, 0}, k,
+                                           "v" + std::to_string(v)));
+    vcar::Mask m(160, 120, 1, 0);
+    for (int y = 0; y < 120; ++y)
+      for (int x = 0; x < 160; ++x) m(x, y) = (x - 80) * (x - 80) + (y - 60) * (y - 60) < 40 * 40 + 10 * v ? 255 : 0;
+    f.masks.push_back(m);
+  }
+  return f;
+}
+
 }  // namespace
 
 TEST_CASE("symmetric_eigen2 matches a brute-force eigen solver") {
@@ -276,26 +309,12 @@ TEST_CASE("reference-code rules on the straddling Gaussian") {
 }
 
 TEST_CASE("results are bit-identical for any thread count") {
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<float> U(-1.f, 1.f), L(-4.f, -2.f);
-  vcar::GaussianScene g;
-  const int n = 6000;
-  g.resize(n);
-  for (int i = 0; i < n; ++i)
-    g.set(i, {U(rng), U(rng), U(rng)}, {L(rng), L(rng), L(rng)}, {U(rng), U(rng), U(rng), U(rng) + 0.01f}, 0.f);
-  std::vector<vcar::Index> cand(n);
-  for (int i = 0; i < n; ++i) cand[i] = static_cast<vcar::Index>(n - 1 - i);
-  const vcar::Intrinsics k{160, 120, 150.f, 150.f, 80.f, 60.f};
-  std::vector<vcar::Camera> cams;
-  std::vector<vcar::Mask> masks;
-  for (int v = 0; v < 6; ++v) {
-    const float a = 1.047f * v;
-    cams.push_back(vcar::Camera::look_at({3.5f * std::cos(a), 0.5f, 3.5f * std::sin(a)}, {0, 0, 0}, {0, 1, 0}, k, "v" + std::to_string(v)));
-    vcar::Mask m(160, 120, 1, 0);
-    for (int y = 0; y < 120; ++y)
-      for (int x = 0; x < 160; ++x) m(x, y) = (x - 80) * (x - 80) + (y - 60) * (y - 60) < 40 * 40 + 10 * v ? 255 : 0;
-    masks.push_back(m);
-  }
+  const RingFixture f = ring_fixture();
+  const vcar::GaussianScene& g = f.scene;
+  const std::vector<vcar::Camera>& cams = f.cams;
+  const std::vector<vcar::Mask>& masks = f.masks;
+  std::vector<vcar::Index> cand(f.scene.size());
+  for (std::size_t i = 0; i < cand.size(); ++i) cand[i] = static_cast<vcar::Index>(cand.size() - 1 - i);
   auto go = [&](int threads) {
     vcar::set_num_threads(threads);
     vcar::BoundaryRefinement abr(g, cand);
@@ -409,13 +428,7 @@ TEST_CASE("incremental refinement (carry, change_view, complete_view) equals a r
   // A ball of Gaussians seen by 8 views with disc masks. The previous refinement held candidates
   // [0, 6000) under masks A; the next holds [1000, 7000) under masks where view 1 changed, view
   // 3 was cleared, view 5 is new and the others are unchanged.
-  std::mt19937 rng(21);
-  std::uniform_real_distribution<float> U(-1.f, 1.f), L(-5.f, -2.5f);
-  vcar::GaussianScene g;
-  const int n = 8000;
-  g.resize(n);
-  for (int i = 0; i < n; ++i)
-    g.set(i, {U(rng), U(rng), U(rng)}, {L(rng), L(rng), L(rng)}, {U(rng), U(rng), U(rng), U(rng) + 0.01f}, 0.f);
+  const vcar::GaussianScene g = random_gaussians(8000, 21, -5.f, -2.5f);
   const vcar::Intrinsics k{160, 120, 140.f, 140.f, 80.f, 60.f};
   std::vector<vcar::Camera> cams;
   auto disc = [](int r, int dx) {
@@ -477,27 +490,13 @@ TEST_CASE("incremental refinement (carry, change_view, complete_view) equals a r
 }
 
 TEST_CASE("expect_views skips candidates whose gate cannot open, with the same result") {
-  // The thread-count fixture: 6000 random Gaussians, 6 ring views with disc masks.
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<float> U(-1.f, 1.f), L(-4.f, -2.f);
-  vcar::GaussianScene g;
-  const int n = 6000;
-  g.resize(n);
-  for (int i = 0; i < n; ++i)
-    g.set(i, {U(rng), U(rng), U(rng)}, {L(rng), L(rng), L(rng)}, {U(rng), U(rng), U(rng), U(rng) + 0.01f}, 0.f);
-  std::vector<vcar::Index> cand(n);
-  for (int i = 0; i < n; ++i) cand[i] = static_cast<vcar::Index>(i);
-  const vcar::Intrinsics k{160, 120, 150.f, 150.f, 80.f, 60.f};
-  std::vector<vcar::Camera> cams;
-  std::vector<vcar::Mask> masks;
-  for (int v = 0; v < 6; ++v) {
-    const float a = 1.047f * v;
-    cams.push_back(vcar::Camera::look_at({3.5f * std::cos(a), 0.5f, 3.5f * std::sin(a)}, {0, 0, 0}, {0, 1, 0}, k, "v" + std::to_string(v)));
-    vcar::Mask m(160, 120, 1, 0);
-    for (int y = 0; y < 120; ++y)
-      for (int x = 0; x < 160; ++x) m(x, y) = (x - 80) * (x - 80) + (y - 60) * (y - 60) < 40 * 40 + 10 * v ? 255 : 0;
-    masks.push_back(m);
-  }
+  const RingFixture f = ring_fixture();
+  const vcar::GaussianScene& g = f.scene;
+  const std::vector<vcar::Camera>& cams = f.cams;
+  const std::vector<vcar::Mask>& masks = f.masks;
+  const int n = static_cast<int>(g.size());
+  std::vector<vcar::Index> cand(g.size());
+  for (std::size_t i = 0; i < cand.size(); ++i) cand[i] = static_cast<vcar::Index>(i);
   vcar::AbrParams p;
   for (float rho : {0.6f, 0.2f, 0.f}) {
     p.rho = rho;
