@@ -204,7 +204,7 @@ void run_scenario(bool limb_band, int n, int views, int repeats) {
   std::printf("threads agree bit for bit: %s\n", r1.log_scale == r2.log_scale ? "yes" : "NO");
   std::printf("plain vs library: compressed %zu vs %zu, axes differing by > 1e-3 in log s: %zu, max |d log s| %.2e\n",
               plain_compressed, r1.compressed, disagree, max_diff);
-  std::printf("state per candidate: %zu bytes (index, mean, rotation, scales, log-scales, 2 x uint16 counts, 3 minima)\n",
+  std::printf("state per candidate: %zu bytes (index, mean, rotation, scales, log-scales, 2 x uint16 counts, 3 minima and the views that set them)\n",
               vcar::BoundaryRefinement::bytes_per_candidate());
 }
 
