@@ -163,16 +163,25 @@ inline AbrObservation observe_projected(const Camera& cam, const Mask& mask, con
   return obs;
 }
 
+// B.1 and rule (e): the camera-space mean t and projected centre m of mean mu; true when the
+// centre lies between the near and far planes and on the mask's foreground (eligible).
+inline bool eligible_centre(const Camera& cam, const Mask& mask, const Eigen::Vector3f& mu, const AbrParams& p,
+                            Eigen::Vector3f& t, Eigen::Vector2f& m) {
+  t = cam.to_camera(mu);
+  if (!(t.z() >= p.projection.near_plane && t.z() <= p.projection.far_plane)) return false;
+  m = {cam.fx * t.x() / t.z() + cam.cx, cam.fy * t.y() / t.z() + cam.cy};
+  return mask_at(mask, m.x(), m.y());
+}
+
 // One Gaussian (mean mu, rotation R with columns r_d, scales s) in one view with its mask.
 // Assumes mask is camera-sized (checked where views enter, BoundaryRefinement::add_view).
 inline AbrObservation observe_gaussian(const Camera& cam, const Mask& mask, const Eigen::Vector3f& mu,
                                        const Eigen::Matrix3f& R, const Eigen::Vector3f& s,
                                        const AbrParams& p) {
   // Eligibility first (rule (b), B.1): most Gaussian-views that fail it skip the covariance.
-  const Eigen::Vector3f t = cam.to_camera(mu);
-  if (!(t.z() >= p.projection.near_plane && t.z() <= p.projection.far_plane)) return {};  // rule (e)
-  const Eigen::Vector2f m(cam.fx * t.x() / t.z() + cam.cx, cam.fy * t.y() / t.z() + cam.cy);
-  if (!mask_at(mask, m.x(), m.y())) return {};
+  Eigen::Vector3f t;
+  Eigen::Vector2f m;
+  if (!eligible_centre(cam, mask, mu, p, t, m)) return {};
   return observe_projected(cam, mask, m, perspective_jacobian(cam, t, p.projection.frustum_margin), R, s, p);
 }
 
@@ -233,22 +242,14 @@ class BoundaryRefinement {
   void add_view(const Camera& cam, const Mask& mask) { add_view(cam, mask, static_cast<std::uint16_t>(views_)); }
   void add_view(const Camera& cam, const Mask& mask, std::uint16_t view) {
     check_view(cam, mask, view);
-    if (views_ == std::numeric_limits<std::uint16_t>::max())
-      throw Error("more than 65535 views for ABR", "view '" + cam.name + "'");
     if (expected_ && views_ >= expected_)
       throw Error("more views than expect_views announced (" + std::to_string(expected_) + ")", "view '" + cam.name + "'");
-    ++views_;
+    enter_view(cam);
     tiles_.build(mask);
-    if (!expected_) {
-      observe_view(cam, mask, true, [](std::size_t) { return true; }, [&](std::size_t k, const AbrObservation& obs) {
-        add(k, obs, view);
-      });
-      return;
-    }
-    // Views after this one: a candidate whose gate cannot open even if it overflows in all of
-    // them is not observed any more (see expect_views).
-    const std::size_t after = expected_ - views_;
-    observe_view(cam, mask, true, [&](std::size_t k) { return gate_can_open(k, after + 1); },
+    // With expect_views: this view and those after it; a candidate whose gate cannot open even
+    // if it overflows in all of them is not observed any more.
+    const std::size_t remaining = expected_ ? expected_ - views_ + 1 : 0;
+    observe_view(cam, mask, true, [&](std::size_t k) { return !expected_ || gate_can_open(k, remaining); },
                  [&](std::size_t k, const AbrObservation& obs) { add(k, obs, view); });
   }
 
@@ -319,9 +320,7 @@ class BoundaryRefinement {
     }
     if (new_mask) {
       check_view(cam, *new_mask, view);
-      if (views_ == std::numeric_limits<std::uint16_t>::max())
-        throw Error("more than 65535 views for ABR", "view '" + cam.name + "'");
-      ++views_;
+      enter_view(cam);
       tiles_.build(*new_mask);
       observe_view(cam, *new_mask, true, is_carried, [&](std::size_t k, const AbrObservation& obs) {
         add(k, obs, view);
@@ -416,6 +415,13 @@ class BoundaryRefinement {
     if (view == no_view) throw Error("view ids go up to 65534", where);
   }
 
+  // Counts one more view (the uint16 counters hold at most 65535).
+  void enter_view(const Camera& cam) {
+    if (views_ == std::numeric_limits<std::uint16_t>::max())
+      throw Error("more than 65535 views for ABR", "view '" + cam.name + "'");
+    ++views_;
+  }
+
   // Whether slot k can still end with gamma > rho (B.3) when `remaining` views are to come
   // (this one included): (n_ovf + R) / (n_vis + R) against rho, with a margin so that the
   // float gate of finish() never decides otherwise.
@@ -472,10 +478,9 @@ class BoundaryRefinement {
         for (std::size_t k = j0; k < j1; ++k) {
           if (!want(k)) continue;
           // observe_gaussian, with the mask tiles' shortcut between eligibility and covariance.
-          const Eigen::Vector3f t = cam.to_camera(Eigen::Vector3f(mu_[0][k], mu_[1][k], mu_[2][k]));
-          if (!(t.z() >= p.projection.near_plane && t.z() <= p.projection.far_plane)) continue;  // rule (e)
-          const Eigen::Vector2f m(cam.fx * t.x() / t.z() + cam.cx, cam.fy * t.y() / t.z() + cam.cy);
-          if (!mask_at(mask, m.x(), m.y())) continue;  // not eligible (B.1)
+          Eigen::Vector3f t;
+          Eigen::Vector2f m;
+          if (!eligible_centre(cam, mask, Eigen::Vector3f(mu_[0][k], mu_[1][k], mu_[2][k]), p, t, m)) continue;
           const Eigen::Matrix<float, 2, 3> J = perspective_jacobian(cam, t, p.projection.frustum_margin);
           if (tiles && reach_on_foreground(cam, J, m, max_scale_squared(k), p)) {
             apply(k, inside);  // eligible, no endpoint outside
