@@ -203,15 +203,41 @@ void add_trained_donuts(synth::World& w, std::uint64_t seed) {
   for (std::size_t i = 0; i < donut.size(); ++i) { lo = lo.cwiseMin(donut.mu(i)); hi = hi.cwiseMax(donut.mu(i)); }
   const float s = 0.15f / (0.5f * (hi - lo).maxCoeff());
   const Eigen::Vector3f c = 0.5f * (lo + hi);
-  const Eigen::Vector3f at(-0.5f, -0.5f, 0.5f * s * (hi - lo).z() + 0.01f);
+  const float touch = s * (hi - lo).x();  // side by side: the copies' extents meet
+  const Eigen::Vector3f offsets[4] = {{0.f, 0.f, 0.f}, {touch, 0.f, 0.f}, {-0.1f, 0.4f, 0.f}, {-0.42f, 0.05f, 0.f}};
+  // The copies go to the first spot, from (-0.5, -0.5) outwards, where all of them lie on the
+  // table and none overlaps a primitive (bounding circles apart), else where at least the target
+  // copy overlaps none: a distractor drawn there would bury part of the target.
+  const float r_copy = 0.5f * s * std::max((hi - lo).x(), (hi - lo).y());
+  auto clear = [&](const Eigen::Vector2f& spot, int copies) {
+    for (int k = 0; k < 4; ++k) {
+      const Eigen::Vector2f p = spot + offsets[k].head<2>();
+      if (std::max(std::abs(p.x()), std::abs(p.y())) + r_copy > 0.98f) return false;  // on the table
+      for (const auto& q : w.primitives)
+        if (k < copies && q.object_id != 0 && (p - q.t.head<2>()).norm() < synth::bounding_radius(q) + r_copy + 0.02f)
+          return false;
+    }
+    return true;
+  };
+  Eigen::Vector2f spot(-0.5f, -0.5f);
+  for (int copies : {4, 1}) {
+    if (clear(spot, copies)) break;
+    bool found = false;
+    for (int ring = 1; ring <= 20 && !found; ++ring)
+      for (int k = 0; k < 8 * ring && !found; ++k) {
+        const float a = 6.2831853f * static_cast<float>(k) / static_cast<float>(8 * ring);
+        const Eigen::Vector2f cand = Eigen::Vector2f(-0.5f, -0.5f) + 0.05f * static_cast<float>(ring) * Eigen::Vector2f(std::cos(a), std::sin(a));
+        if (clear(cand, copies)) { spot = cand; found = true; }
+      }
+    if (found) break;
+  }
+  const Eigen::Vector3f at(spot.x(), spot.y(), 0.5f * s * (hi - lo).z() + 0.01f);
   synth::Rng rng(seed, 0xD0Au);
   synth::insert_gaussians(w, donut, Eigen::Matrix3f::Identity(), at - s * c, s, 9);
-  const float touch = s * (hi - lo).x();  // side by side: the copies' extents meet
-  const Eigen::Vector3f offsets[3] = {{touch, 0.f, 0.f}, {-0.1f, 0.4f, 0.f}, {-0.42f, 0.05f, 0.f}};
   for (int k = 0; k < 3; ++k) {
     const float yaw = rng.uniform(0.f, 6.2831853f);
     const Eigen::Matrix3f R = Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ()).toRotationMatrix();
-    synth::insert_gaussians(w, donut, R, at + offsets[k] - s * (R * c), s, 10 + k);
+    synth::insert_gaussians(w, donut, R, at + offsets[k + 1] - s * (R * c), s, 10 + k);
   }
   w.target_id = 9;
   w.neighbour_id = 10;

@@ -88,6 +88,13 @@ struct VcarParams {
   // Eq. R2: a Gaussian the coarse round sees unoccluded but only inside edge bands is passed on
   // to the fine round (undecided) instead of being judged by its centre pixels.
   bool keep_undecided = false;
+  // Eq. R5: the unoccluded and sure levels weigh each view by how face-on it sees the Gaussian,
+  // omega = (1 - phi) + phi |n . d| (n the normal of its smallest axis, phi its flatness).
+  bool foreshortening = false;
+  // Eq. R6: in the fine round, background pixels within max(w_j, undershoot_band e_j) px of the
+  // mask are no evidence, e_j the mask's undershoot measured against the render of G_coarse;
+  // 0 = off.
+  float undershoot_band = 0.f;
   // Eq. 9-13 read Sigma2D with the renderer's eps2d low-pass (conventions §3, true) or the
   // Gaussian's own footprint (false: overflow within ~1.6 px no longer forces f_min).
   bool abr_lowpass = true;
@@ -120,8 +127,10 @@ struct VcarParams {
     return p;
   }
   // vcar's default (beyond the paper, docs/robust.md): tau_coarse 0.5, tau_fine 0.5, the edge
-  // band (R1-R2), the occlusion test in both rounds (R3), unseen fine candidates kept (R4) and
-  // ABR on the Gaussians' own footprints. What vcar::segment uses when given no parameters.
+  // band (R1-R2), the occlusion test in both rounds (R3), unseen fine candidates kept (R4),
+  // views weighted by foreshortening (R5), the fine round's band widened to the masks' measured
+  // undershoot (R6) and ABR on the Gaussians' own footprints. What vcar::segment uses when
+  // given no parameters.
   static VcarParams robust() {
     VcarParams p;
     p.tau_fine = 0.5f;
@@ -129,6 +138,8 @@ struct VcarParams {
     p.fine_occlusion = true;
     p.coarse_occlusion = true;
     p.keep_unseen = true;
+    p.foreshortening = true;
+    p.undershoot_band = 1.5f;
     p.abr_lowpass = false;
     return p;
   }
@@ -153,8 +164,10 @@ struct VcarParams {
     return a;
   }
 
-  // True when a mechanism beyond the paper changes the vote (RobustVoting, Eq. R1-R4).
-  bool robust_vote() const { return edge_band > 0.f || fine_occlusion || coarse_occlusion || keep_unseen; }
+  // True when a mechanism beyond the paper changes the vote (RobustVoting, Eq. R1-R6).
+  bool robust_vote() const {
+    return edge_band > 0.f || fine_occlusion || coarse_occlusion || keep_unseen || foreshortening || undershoot_band > 0.f;
+  }
 
   // Calls f(name, field) for every field, names exactly as declared (const and non-const).
   template <class Self, class F>
@@ -173,7 +186,8 @@ struct VcarParams {
     f("min_frame_content", p.min_frame_content); f("min_mask_fraction", p.min_mask_fraction);
     f("force_fine_round", p.force_fine_round); f("edge_band", p.edge_band);
     f("fine_occlusion", p.fine_occlusion); f("coarse_occlusion", p.coarse_occlusion);
-    f("keep_unseen", p.keep_unseen); f("keep_undecided", p.keep_undecided); f("kappa", p.kappa); f("abr_lowpass", p.abr_lowpass);
+    f("keep_unseen", p.keep_unseen); f("keep_undecided", p.keep_undecided); f("kappa", p.kappa);
+    f("foreshortening", p.foreshortening); f("undershoot_band", p.undershoot_band); f("abr_lowpass", p.abr_lowpass);
   }
 
   // Throws vcar::Error naming the first parameter outside its range.
@@ -210,6 +224,8 @@ struct VcarParams {
     unit("min_frame_content", min_frame_content);
     unit("min_mask_fraction", min_mask_fraction);
     if (!(kappa >= 0.f && std::isfinite(kappa))) bad("kappa", "must be >= 0, got " + std::to_string(kappa));
+    if (!(undershoot_band >= 0.f && undershoot_band <= 100.f))
+      bad("undershoot_band", "must be in [0, 100] (0 = off), got " + std::to_string(undershoot_band));
     if (!(edge_band >= 0.f && edge_band <= 1.f)) bad("edge_band", "must be in [0, 1] (0 = off), got " + std::to_string(edge_band));
   }
 

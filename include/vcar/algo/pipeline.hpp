@@ -177,21 +177,26 @@ class RoundVote {
 public:
   RoundVote(const GaussianScene& scene, const std::vector<Index>* candidates, const VcarParams& p, bool fine)
       : occlusion_(p.occlusion_aware || (fine ? p.fine_occlusion : p.coarse_occlusion)),
+        undershoot_(fine && p.undershoot_band > 0.f),
         undecided_kept_(!fine && p.keep_undecided), keep_unseen_(fine && p.keep_unseen) {
     if (p.robust_vote()) {
-      if (candidates) robust_.emplace(scene, *candidates, p.edge_band, p.kappa);
-      else robust_.emplace(scene, p.edge_band, p.kappa);
+      // Eq. R6 needs frames rendered from the candidates alone: the fine round's.
+      const RobustVoteOptions o{p.edge_band, p.kappa, p.foreshortening, undershoot_ ? p.undershoot_band : 0.f};
+      if (candidates) robust_.emplace(scene, *candidates, o);
+      else robust_.emplace(scene, o);
     } else if (candidates) {
       paper_.emplace(scene, *candidates);
     } else {
       paper_.emplace(scene);
     }
   }
-  bool wants_depth() const { return occlusion_; }
+  // The view's render is needed: depth and alpha for Eq. R3, alpha for Eq. R6.
+  bool wants_depth() const { return occlusion_ || undershoot_; }
+  bool occlusion() const { return occlusion_; }
 
-  // One view; `render` (depth + alpha) when the occlusion test is on.
+  // One view; `render` (depth + alpha) when wants_depth().
   void add_view(const Camera& cam, const Mask* m, const RenderOutput* render, float tolerance) {
-    const ImageF* depth = render ? &render->depth : nullptr;
+    const ImageF* depth = render && occlusion_ ? &render->depth : nullptr;
     const ImageF* alpha = render ? &render->alpha : nullptr;
     if (robust_) robust_->add_view(cam, m, depth, alpha, tolerance);
     else if (depth) paper_->add_view(cam, m, depth, alpha, tolerance);
@@ -206,7 +211,7 @@ public:
   }
 
 private:
-  bool occlusion_, undecided_kept_, keep_unseen_;
+  bool occlusion_, undershoot_, undecided_kept_, keep_unseen_;
   std::optional<VisibilityVoting> paper_;
   std::optional<RobustVoting> robust_;
 };
@@ -230,7 +235,7 @@ void vote(RoundVote& voting, const Camera& cam, const Mask* m, const RenderOutpu
     own = renderer.render(q);
     render = &own;
   }
-  if (render->depth.empty())
+  if (render->depth.empty() && voting.occlusion())
     throw Error("the occlusion test needs a renderer that returns depth", "view '" + cam.name + "'");
   voting.add_view(cam, m, render, params.depth_tolerance);
 }

@@ -18,6 +18,14 @@
 //   R^2_i = (F^s_i + kappa R^1_i) / (V^s_i + kappa),   R_i = R^2_i,   y_i = 1[R_i >= tau].
 // (kappa = 0: the most reliable level with a view decides alone.) With the band off and no
 // depth images all levels hold the same counts and R_i = F_i / V_i, Eq. 3.
+// Two more mechanisms, each an option (RobustVoteOptions):
+//   foreshortening (Eq. R5, foreshortening.hpp): the unoccluded and sure levels sum the weight
+//                   omega_ij of each view (how face-on it sees the Gaussian) instead of counting
+//                   views: V^o_i = sum omega_ij, F^o_i = sum omega_ij M(p), and so for the sure
+//                   level; 16 more bytes per candidate for the sums, 16 for phi_i n_i, 1 - phi_i;
+//   gamma (Eq. R6, undershoot.hpp): in a round whose frames are renders of the candidates, the
+//                   background pixels within max(w_j, gamma e_j) of the mask are unsure, e_j the
+//                   mask's undershoot measured against the render's alpha.
 // Two exceptions, each a switch of selected():
 //   undecided_kept: a Gaussian seen unoccluded but only inside bands (V^o > 0 = V^s) is kept
 //                   (the coarse round passes it on to the fine round, which decides);
@@ -34,7 +42,9 @@
 #include <vector>
 
 #include "vcar/algo/edge_band.hpp"
+#include "vcar/algo/foreshortening.hpp"
 #include "vcar/algo/mean_projection.hpp"
+#include "vcar/algo/undershoot.hpp"
 #include "vcar/core/camera.hpp"
 #include "vcar/core/error.hpp"
 #include "vcar/core/gaussian_scene.hpp"
@@ -43,6 +53,14 @@
 
 namespace vcar {
 
+// The mechanisms of RobustVoting (each off by default; VcarParams carries them).
+struct RobustVoteOptions {
+  float beta = 0.f;             // Eq. R1a: band factor (0 = off)
+  float kappa = 2.f;            // Eq. R2: prior weight in views
+  bool foreshortening = false;  // Eq. R5: views weighted by how face-on they see the Gaussian
+  float gamma = 0.f;            // Eq. R6: outer band reach factor on the undershoot (0 = off)
+};
+
 class RobustVoting {
 public:
   static constexpr std::size_t max_views = 65535;  // uint16_t counters
@@ -50,20 +68,25 @@ public:
 
   // Every Gaussian of `scene` is a candidate (means referenced: the scene must outlive this).
   // beta: Eq. R1a band factor (0 = off).
-  RobustVoting(const GaussianScene& scene, float beta, float kappa = 2.f) : beta_(beta), kappa_(kappa) {
-    init(scene.mean[0].data(), scene.mean[1].data(), scene.mean[2].data(), scene.size());
+  RobustVoting(const GaussianScene& scene, const RobustVoteOptions& o) : o_(o) {
+    init(scene, scene.mean[0].data(), scene.mean[1].data(), scene.mean[2].data(), scene.size());
   }
+  RobustVoting(const GaussianScene& scene, float beta, float kappa = 2.f)
+      : RobustVoting(scene, RobustVoteOptions{beta, kappa}) {}
   // The Gaussians `candidates` of `scene` (scene indices, any order; means copied).
-  RobustVoting(const GaussianScene& scene, std::vector<Index> candidates, float beta, float kappa = 2.f)
-      : beta_(beta), kappa_(kappa), candidates_(std::move(candidates)) {
+  RobustVoting(const GaussianScene& scene, std::vector<Index> candidates, const RobustVoteOptions& o)
+      : o_(o), candidates_(std::move(candidates)) {
     own_ = detail::candidate_means(scene, candidates_);
-    init(own_[0].data(), own_[1].data(), own_[2].data(), candidates_.size());
+    init(scene, own_[0].data(), own_[1].data(), own_[2].data(), candidates_.size());
   }
+  RobustVoting(const GaussianScene& scene, std::vector<Index> candidates, float beta, float kappa = 2.f)
+      : RobustVoting(scene, std::move(candidates), RobustVoteOptions{beta, kappa}) {}
   RobustVoting(const RobustVoting&) = delete;
   RobustVoting& operator=(const RobustVoting&) = delete;
 
   // One view. mask null: no evidence (conventions §4). expected_depth and alpha (W x H, one
-  // channel; the view's render of the Gaussians the segmenter saw): Eq. R3 with `tolerance`.
+  // channel; the view's render of the Gaussians the segmenter saw): Eq. R3 with `tolerance`, and
+  // Eq. R6 (gamma > 0) when that render is of the candidates alone.
   void add_view(const Camera& camera, const Mask* mask, const ImageF* expected_depth = nullptr,
                 const ImageF* alpha = nullptr, float tolerance = 0.f) {
     if (!mask) return;
@@ -71,7 +94,7 @@ public:
     if (mask->width != camera.width || mask->height != camera.height || mask->channels != 1)
       throw Error("mask is " + std::to_string(mask->width) + "x" + std::to_string(mask->height) + ", view is " +
                   std::to_string(camera.width) + "x" + std::to_string(camera.height), where);
-    if ((expected_depth == nullptr) != (alpha == nullptr)) throw Error("depth and alpha come together", where);
+    if (expected_depth && !alpha) throw Error("the depth image needs the alpha image of the same render", where);
     for (const ImageF* im : {expected_depth, alpha})
       if (im && (im->width != camera.width || im->height != camera.height || im->channels != 1))
         throw Error("depth/alpha image is not the view's size with one channel", where);
@@ -79,19 +102,33 @@ public:
     ++views_;
     const std::uint8_t* sure_fg = mask->data.data();
     const std::uint8_t* sure = nullptr;  // null: every pixel is sure
-    if (!(kappa_ >= 0.f)) throw Error("kappa must be >= 0", "voting");
-    if (beta_ > 0.f) {
+    if (!(o_.kappa >= 0.f)) throw Error("kappa must be >= 0", "voting");
+    int w = 0;
+    if (o_.beta > 0.f) {
       std::size_t fg = 0;
       for (std::uint8_t b : mask->data) fg += b != 0;
-      edge_band(*mask, edge_band_width(fg, beta_), band_, scratch_);
+      w = edge_band_width(fg, o_.beta);
+      edge_band(*mask, w, band_, scratch_);
       sure_fg = band_.sure_foreground.data.data();
       sure = band_.sure.data.data();
+    }
+    if (o_.gamma > 0.f && alpha) {
+      last_undershoot_ = undershoot_px(*mask, *alpha);                                     // Eq. R6a
+      const double reach = std::max<double>(w, o_.gamma * last_undershoot_);               // Eq. R6b
+      if (reach > w) {
+        if (sure) outer_.assign(sure, sure + mask->data.size());
+        else outer_.assign(mask->data.size(), 255);
+        widen_outer_band(*mask, reach, outer_);
+        sure = outer_.data();
+      }
     }
     const detail::MeanProjection P = detail::MeanProjection::from(camera);
     const std::uint8_t* M = mask->data.data();
     const float* D = expected_depth ? expected_depth->data.data() : nullptr;
     const float* A = alpha ? alpha->data.data() : nullptr;
     const float scale = 1.f + tolerance;
+    const bool weighted = o_.foreshortening;
+    const Eigen::Vector3f C = camera.position();
     parallel_chunks(static_cast<std::int64_t>(n_), static_cast<std::int64_t>(chunk),
                     [&](std::int64_t, std::int64_t b, std::int64_t e) {
       constexpr std::size_t L = detail::mean_batch;
@@ -108,8 +145,11 @@ public:
           ++c_[0][i]; c_[1][i] = static_cast<std::uint16_t>(c_[1][i] + f);                  // Eq. 2
           if (D && A[p] >= 0.5f && !(z[l] <= D[p] / A[p] * scale)) continue;                  // Eq. R3
           ++c_[2][i]; c_[3][i] = static_cast<std::uint16_t>(c_[3][i] + f);
+          const float omega = weighted ? fs_.weight(i, x_[i], y_[i], z_[i], C) : 1.f;        // Eq. R5
+          if (weighted) { w_[0][i] += omega; w_[1][i] += f ? omega : 0.f; }
           if (sure && !sure[p]) continue;                                                      // Eq. R1
           ++c_[4][i]; c_[5][i] = static_cast<std::uint16_t>(c_[5][i] + (sure_fg[p] != 0));
+          if (weighted) { w_[2][i] += omega; w_[3][i] += sure_fg[p] != 0 ? omega : 0.f; }
         }
       }
     });
@@ -121,8 +161,14 @@ public:
   // Counters of candidate k: level 0 plain (V, F), 1 unoccluded (V^o, F^o), 2 sure (V^s, F^s).
   std::uint16_t visible(std::size_t k, int level = 0) const { return c_[2 * level][k]; }
   std::uint16_t foreground(std::size_t k, int level = 0) const { return c_[2 * level + 1][k]; }
+  // Eq. R5 sums of candidate k at level 1 (unoccluded) or 2 (sure); 0 without foreshortening.
+  float weight(std::size_t k, int level) const { return o_.foreshortening ? w_[2 * level - 2][k] : 0.f; }
+  float weighted_foreground(std::size_t k, int level) const { return o_.foreshortening ? w_[2 * level - 1][k] : 0.f; }
+  // Eq. R6a of the latest view voted with gamma > 0 and a render (px).
+  double last_undershoot_px() const noexcept { return last_undershoot_; }
+  const RobustVoteOptions& options() const noexcept { return o_; }
 
-  // Eq. R2 (Eq. 3 at level 0).
+  // Eq. R2 (Eq. 3 at level 0), with Eq. R5's sums at levels 1-2 when foreshortening is on.
   float ratio(std::size_t k) const {
     float R = static_cast<float>(foreground(k)) / static_cast<float>(std::max<std::uint16_t>(visible(k), 1));
     // While R is the plain ratio of counts equal to this level's, the shrunk value equals R
@@ -130,17 +176,23 @@ public:
     // again (FMA or not), so Eq. 3 comes out identical whenever the mechanisms add nothing.
     bool plain = true;
     for (int level = 1; level <= 2; ++level) {
+      const float kappa = o_.kappa;
+      if (o_.foreshortening) {
+        const float V = weight(k, level), F = weighted_foreground(k, level);
+        if (V + kappa > 0.f) R = (F + kappa * R) / (V + kappa);
+        continue;
+      }
       if (plain && visible(k, level) == visible(k) && foreground(k, level) == foreground(k)) continue;
       plain = false;
       const float V = static_cast<float>(visible(k, level)), F = static_cast<float>(foreground(k, level));
-      if (V + kappa_ > 0.f) R = (F + kappa_ * R) / (V + kappa_);
+      if (V + kappa > 0.f) R = (F + kappa * R) / (V + kappa);
     }
     return R;
   }
   // Eq. 3 / R2 / R4 for candidate k (the switches as at the top of the file).
   bool kept(std::size_t k, float tau, bool undecided_kept, bool keep_unseen) const {
     if (keep_unseen && visible(k) == 0) return true;
-    if (undecided_kept && beta_ > 0.f && visible(k, 2) == 0 && visible(k, 1) > 0) return true;
+    if (undecided_kept && o_.beta > 0.f && visible(k, 2) == 0 && visible(k, 1) > 0) return true;
     return ratio(k) >= tau;
   }
   // Scene indices (ascending) of the kept candidates, and their R_i.
@@ -156,18 +208,26 @@ public:
   }
 
 private:
-  void init(const float* x, const float* y, const float* z, std::size_t n) {
+  void init(const GaussianScene& scene, const float* x, const float* y, const float* z, std::size_t n) {
     x_ = x; y_ = y; z_ = z; n_ = n;
     for (auto& c : c_) c.assign(n, 0);
+    if (o_.foreshortening) {
+      fs_ = Foreshortening::of(scene, candidates_);
+      for (auto& c : w_) c.assign(n, 0.f);
+    }
   }
 
-  float beta_ = 0.f, kappa_ = 2.f;
+  RobustVoteOptions o_;
   const float *x_ = nullptr, *y_ = nullptr, *z_ = nullptr;
   std::size_t n_ = 0, views_ = 0;
   std::vector<Index> candidates_;
   std::array<std::vector<float>, 3> own_;
   std::array<std::vector<std::uint16_t>, 6> c_;  // V, F, V^o, F^o, V^s, F^s
+  Foreshortening fs_;
+  std::array<std::vector<float>, 4> w_;  // Eq. R5: weighted V^o, F^o, V^s, F^s
   EdgeBandMasks band_;
+  std::vector<std::uint8_t> outer_;      // Eq. R6b: the sure plane with the widened outer band
+  double last_undershoot_ = 0;
   std::vector<std::uint32_t> scratch_;
 };
 

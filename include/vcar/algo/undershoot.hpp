@@ -1,0 +1,59 @@
+#pragma once
+// Beyond the paper: an outer band as wide as the mask's measured undershoot (docs/robust.md,
+// Eq. R6). Used in the fine round, whose frames are renders of G_coarse alone.
+//
+// A segmenter that undershoots (an eroded mask) does it again on every frame of the fine round,
+// so the rim of G_coarse falls outside the mask of every sampled view and the fine vote erodes
+// the coarse selection a second time. In that round the library has the render of the object
+// it asked about (alpha A_j of G_coarse), and the mask's undershoot can be read off the frame:
+//   C_j  = contour of M_j: foreground pixels with a 4-neighbour background pixel in the image
+//   e_j  = median over p in C_j of max(0, dist(p, {A_j < 0.5}) - 1)                 (Eq. R6a)
+// (distance between pixel centres; a contour on the render's own edge gives 0, a mask eroded by
+// e px inside the render gives ~e, a dilated one 0). The background pixels of M_j within
+//   reach_j = max(w_j, gamma e_j)                                                   (Eq. R6b)
+// px (Euclidean) of its foreground are no evidence (unsure, Eq. R1b): a Gaussian of G_coarse
+// that the undershooting mask leaves out is not counted as background there. With gamma e_j <= w_j
+// (clean masks: e_j ~ 0-2 px from the splats' own extent) nothing changes. O(W H) per frame.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "vcar/core/distance_transform.hpp"
+#include "vcar/core/image.hpp"
+
+namespace vcar {
+
+// Eq. R6a: the undershoot e_j of mask m against the render alpha (same size, one channel), px.
+// 0 when the mask has no contour or the render no background.
+inline double undershoot_px(const Mask& m, const ImageF& alpha) {
+  const int W = m.width, H = m.height;
+  std::vector<std::uint8_t> render_bg(m.data.size());
+  for (std::size_t q = 0; q < render_bg.size(); ++q) render_bg[q] = !(alpha.data[q] >= 0.5f);
+  const std::vector<double> d2 = squared_distance_to(render_bg, W, H);
+  std::vector<double> e;
+  const std::uint8_t* M = m.data.data();
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      const std::size_t q = static_cast<std::size_t>(y) * W + x;
+      if (!M[q]) continue;
+      const bool contour = (x > 0 && !M[q - 1]) || (x + 1 < W && !M[q + 1]) ||
+                           (y > 0 && !M[q - W]) || (y + 1 < H && !M[q + W]);
+      if (contour && std::isfinite(d2[q])) e.push_back(std::max(0.0, std::sqrt(d2[q]) - 1.0));
+    }
+  if (e.empty()) return 0.0;
+  const auto mid = e.begin() + static_cast<std::ptrdiff_t>(e.size() / 2);
+  std::nth_element(e.begin(), mid, e.end());
+  return *mid;
+}
+
+// Eq. R6b: marks unsure (0) in `sure` (W x H, 255 = sure) every background pixel of m whose
+// distance to the nearest foreground pixel is at most reach px.
+inline void widen_outer_band(const Mask& m, double reach, std::vector<std::uint8_t>& sure) {
+  if (!(reach > 0.0)) return;
+  const std::vector<double> d2 = squared_distance_to(m.data, m.width, m.height);
+  for (std::size_t q = 0; q < m.data.size(); ++q)
+    if (!m.data[q] && d2[q] <= reach * reach) sure[q] = 0;
+}
+
+}  // namespace vcar
