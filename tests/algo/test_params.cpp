@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <set>
 
 #include "vcar/algo/params.hpp"
@@ -74,6 +75,8 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
   CHECK(r.fine_occlusion);
   CHECK(r.coarse_occlusion);
   CHECK(r.keep_unseen);
+  CHECK(r.foreshortening);
+  CHECK(r.undershoot_band > 0.f);
   CHECK_FALSE(r.abr_lowpass);
   CHECK(r.kappa == 2.f);
   CHECK(r.robust_vote());
@@ -81,6 +84,8 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
   for (const auto& p : {VcarParams::nvos(), VcarParams::lerf(), VcarParams::reference_code()}) {
     CHECK_FALSE(p.robust_vote());
     CHECK(p.edge_band == 0.f);
+    CHECK_FALSE(p.foreshortening);
+    CHECK(p.undershoot_band == 0.f);
     CHECK(p.abr_lowpass);
   }
   CHECK(VcarParams::reference_code().force_fine_round);
@@ -98,4 +103,10 @@ TEST_CASE("validate: rho = 1 can never trigger the strict gate, and the robust p
   p = {}; p.edge_band = -0.1f; CHECK(where_of(p) == "edge_band");
   p = {}; p.edge_band = 1.5f;  CHECK(where_of(p) == "edge_band");
   p = {}; p.kappa = -1.f;      CHECK(where_of(p) == "kappa");
+  p = {}; p.undershoot_band = -1.f; CHECK(where_of(p) == "undershoot_band");
+  p = {}; p.undershoot_band = NAN;  CHECK(where_of(p) == "undershoot_band");
+  p = {}; p.undershoot_band = 2.f;  CHECK(where_of(p) == "");
+  // Each mechanism alone makes the vote RobustVoting's.
+  p = {}; p.foreshortening = true;  CHECK(p.robust_vote());
+  p = {}; p.undershoot_band = 1.f;  CHECK(p.robust_vote());
 }

@@ -128,4 +128,105 @@ TEST_CASE("RobustVoting rejects masks and depth images of the wrong size, naming
   Mask m(20, 20, 1);
   ImageF d(20, 10, 1), a(20, 20, 1);
   CHECK_THROWS_WITH(v.add_view(c, &m, &d, &a, 0.05f), Catch::Contains("depth/alpha"));
+  CHECK_THROWS_WITH(v.add_view(c, &m, &a, nullptr, 0.05f), Catch::Contains("alpha image"));
+}
+
+TEST_CASE("Eq. R5 in the vote: the unoccluded and sure levels sum omega of the views that count there (brute force)") {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> U(-1.f, 1.f), S(-4.f, -1.f);
+  const std::size_t n = 2000;
+  vcar::GaussianScene scene;
+  scene.resize(n);
+  for (std::size_t i = 0; i < n; ++i)
+    scene.set(i, {U(rng), U(rng), U(rng) + 2.5f}, {S(rng), S(rng), S(rng)}, {U(rng), U(rng), U(rng), U(rng) + 1.5f}, 0.f);
+  std::vector<Index> cand;
+  for (Index i = 1; i < n; i += 2) cand.push_back(i);
+  vcar::RobustVoteOptions o;
+  o.beta = 0.1f;
+  o.foreshortening = true;
+  vcar::RobustVoting w(scene, cand, o);
+  vcar::RobustVoting counts(scene, cand, 0.1f);  // the same views, unweighted: which level each view reached
+  std::vector<double> V1(cand.size()), F1(cand.size()), V2(cand.size()), F2(cand.size());
+  for (int j = 0; j < 9; ++j) {
+    Camera c = Camera::look_at({2.f * std::cos(0.7f * j), 0.5f * std::sin(1.3f * j), 2.5f + 2.f * std::sin(0.7f * j)},
+                               {0, 0, 2.5f}, {0, -1, 0}, {37, 23, 30, 31, 18.5f, 11.5f}, "c" + std::to_string(j));
+    Mask m(37, 23, 1);
+    for (int y = 4; y < 19; ++y)
+      for (int x = 8 + j % 3; x < 29; ++x) m.data[static_cast<std::size_t>(y) * 37 + x] = 255;
+    ImageF depth(37, 23, 1), alpha(37, 23, 1);
+    for (std::size_t p = 0; p < depth.data.size(); ++p) { alpha.data[p] = 1.f; depth.data[p] = 2.f + 0.2f * static_cast<float>(p % 5); }
+    std::vector<std::array<std::uint16_t, 4>> before(cand.size());
+    for (std::size_t k = 0; k < cand.size(); ++k)
+      before[k] = {counts.visible(k, 1), counts.foreground(k, 1), counts.visible(k, 2), counts.foreground(k, 2)};
+    w.add_view(c, &m, &depth, &alpha, 0.05f);
+    counts.add_view(c, &m, &depth, &alpha, 0.05f);
+    const Eigen::Vector3f C = c.position();
+    for (std::size_t k = 0; k < cand.size(); ++k) {
+      const Index i = cand[k];
+      // omega by hand: the smallest axis, flatness 1 - s_a / s_b.
+      int a = 0;
+      for (int d = 1; d < 3; ++d) if (scene.log_scale[d][i] < scene.log_scale[a][i]) a = d;
+      const double s_a = std::exp(static_cast<double>(scene.log_scale[a][i]));
+      const double s_b = std::exp(static_cast<double>(std::min(scene.log_scale[(a + 1) % 3][i], scene.log_scale[(a + 2) % 3][i])));
+      const double phi = 1.0 - s_a / s_b;
+      const Eigen::Vector3d nrm = scene.R(i).col(a).cast<double>();
+      const Eigen::Vector3d d = (scene.mu(i) - C).cast<double>().normalized();
+      const double omega = (1.0 - phi) + phi * std::abs(nrm.dot(d));
+      V1[k] += omega * (counts.visible(k, 1) - before[k][0]);
+      F1[k] += omega * (counts.foreground(k, 1) - before[k][1]);
+      V2[k] += omega * (counts.visible(k, 2) - before[k][2]);
+      F2[k] += omega * (counts.foreground(k, 2) - before[k][3]);
+    }
+  }
+  int partial = 0;
+  for (std::size_t k = 0; k < cand.size(); ++k) {
+    REQUIRE(w.visible(k, 1) == counts.visible(k, 1));  // the counters are unchanged by R5
+    REQUIRE(w.weight(k, 1) == Approx(V1[k]).margin(1e-4));
+    REQUIRE(w.weighted_foreground(k, 1) == Approx(F1[k]).margin(1e-4));
+    REQUIRE(w.weight(k, 2) == Approx(V2[k]).margin(1e-4));
+    REQUIRE(w.weighted_foreground(k, 2) == Approx(F2[k]).margin(1e-4));
+    // Eq. R2 on the weighted sums.
+    const double R0 = static_cast<double>(w.foreground(k)) / std::max(1, static_cast<int>(w.visible(k)));
+    const double R1 = (F1[k] + 2.0 * R0) / (V1[k] + 2.0);
+    const double R2 = (F2[k] + 2.0 * R1) / (V2[k] + 2.0);
+    REQUIRE(w.ratio(k) == Approx(R2).margin(1e-5));
+    partial += V1[k] > 0 && V1[k] < w.visible(k, 1) - 1e-3;  // some weights below 1 were summed
+  }
+  CHECK(partial > 100);
+  CHECK(counts.weight(0, 1) == 0.f);  // no sums without R5
+}
+
+TEST_CASE("Eq. R6 in the vote: background pixels within gamma e_j of an undershooting mask are no evidence") {
+  // Render alpha [5, 15)^2; the mask [8, 12)^2 undershoots it by e = 3 px (test_undershoot).
+  const auto scene = scene_of({
+      {-0.35f, 0.05f, 1},  // 0: pixel (6, 10): 2 px outside the mask, inside the render
+      {-0.75f, 0.05f, 1},  // 1: pixel (2, 10): 6 px outside the mask
+      {0.05f, 0.05f, 1},   // 2: pixel (10, 10): inside the mask
+  });
+  const Camera c = cam20("a");
+  const Mask m = square(8, 8, 12, 12);
+  ImageF alpha(20, 20, 1);
+  for (int y = 5; y < 15; ++y)
+    for (int x = 5; x < 15; ++x) alpha.data[static_cast<std::size_t>(y) * 20 + x] = 1.f;
+  vcar::RobustVoteOptions o;
+  o.gamma = 1.f;
+  vcar::RobustVoting with(scene, o), without(scene, 0.f);
+  with.add_view(c, &m, nullptr, &alpha);
+  without.add_view(c, &m, nullptr, &alpha);
+  CHECK(with.last_undershoot_px() == 3.0);
+  CHECK(without.visible(0, 2) == 1);  // sure background without R6
+  CHECK(with.visible(0, 2) == 0);     // within max(w, gamma e) = 3 px: unsure
+  CHECK(with.visible(1, 2) == 1);     // 6 px out: still sure background
+  CHECK(with.foreground(1, 2) == 0);
+  CHECK(with.visible(2, 2) == 1);
+  CHECK(with.foreground(2, 2) == 1);
+  // Without a render of the candidates (the coarse round) R6 has nothing to measure.
+  vcar::RobustVoting no_render(scene, o);
+  no_render.add_view(c, &m);
+  CHECK(no_render.visible(0, 2) == 1);
+  // gamma 0.5: reach max(0, 1.5) px: pixel 6 is 2 px out: sure again.
+  o.gamma = 0.5f;
+  vcar::RobustVoting half(scene, o);
+  half.add_view(c, &m, nullptr, &alpha);
+  CHECK(half.visible(0, 2) == 1);
 }

@@ -1,0 +1,68 @@
+#include <catch2/catch.hpp>
+
+#include <vector>
+
+#include "vcar/algo/undershoot.hpp"
+
+using vcar::ImageF;
+using vcar::Mask;
+
+namespace {
+Mask square_mask(int n, int x0, int x1) {
+  Mask m(n, n, 1);
+  for (int y = x0; y < x1; ++y)
+    for (int x = x0; x < x1; ++x) m.data[static_cast<std::size_t>(y) * n + x] = 255;
+  return m;
+}
+ImageF square_alpha(int n, int x0, int x1) {
+  ImageF a(n, n, 1);
+  for (int y = x0; y < x1; ++y)
+    for (int x = x0; x < x1; ++x) a.data[static_cast<std::size_t>(y) * n + x] = 0.9f;
+  return a;
+}
+}  // namespace
+
+TEST_CASE("Eq. R6a by hand: a mask 3 px inside the render undershoots by 3, the render's own edge by 0") {
+  const ImageF alpha = square_alpha(20, 5, 15);  // render [5, 15)^2
+  // Mask [8, 12)^2: every contour pixel is 4 px (centre to centre) from the render's background
+  // (x = 4 or 15, y likewise): e = 4 - 1 = 3.
+  CHECK(vcar::undershoot_px(square_mask(20, 8, 12), alpha) == 3.0);
+  // The mask is the render: contour pixels touch the background at distance 1: e = 0.
+  CHECK(vcar::undershoot_px(square_mask(20, 5, 15), alpha) == 0.0);
+  // A dilated mask: its contour lies in the render's background: e = 0.
+  CHECK(vcar::undershoot_px(square_mask(20, 2, 18), alpha) == 0.0);
+  // No mask, or a render without background: nothing to measure.
+  CHECK(vcar::undershoot_px(Mask(20, 20, 1), alpha) == 0.0);
+  CHECK(vcar::undershoot_px(square_mask(20, 8, 12), square_alpha(20, 0, 20)) == 0.0);
+  // The image border is not a contour: a full mask has none.
+  CHECK(vcar::undershoot_px(square_mask(20, 0, 20), alpha) == 0.0);
+}
+
+TEST_CASE("Eq. R6a is a median: a foreground blob of G_coarse that the mask leaves out does not move it") {
+  // Render: [5, 15)^2 plus a blob [15, 19) x [5, 9) attached to the right (a background piece
+  // in G_coarse). The mask is exactly the square: only its right-edge contour pixels next to
+  // the blob see a larger distance; most contour pixels are on the render's edge.
+  ImageF alpha = square_alpha(20, 5, 15);
+  for (int y = 5; y < 9; ++y)
+    for (int x = 15; x < 19; ++x) alpha.data[static_cast<std::size_t>(y) * 20 + x] = 1.f;
+  CHECK(vcar::undershoot_px(square_mask(20, 5, 15), alpha) == 0.0);
+}
+
+TEST_CASE("Eq. R6b by hand: background pixels within the reach (Euclidean) of the foreground become unsure") {
+  Mask m(9, 9, 1);
+  m.data[4 * 9 + 4] = 255;  // one pixel at (4, 4)
+  std::vector<std::uint8_t> sure(81, 255);
+  vcar::widen_outer_band(m, 2.0, sure);
+  auto at = [&](int x, int y) { return sure[static_cast<std::size_t>(y) * 9 + x]; };
+  CHECK(at(4, 4) == 255);  // foreground pixels are not touched
+  CHECK(at(6, 4) == 0);    // distance 2
+  CHECK(at(5, 5) == 0);    // sqrt 2
+  CHECK(at(6, 5) == 255);  // sqrt 5 > 2
+  CHECK(at(0, 0) == 255);
+  int unsure = 0;
+  for (auto v : sure) unsure += v == 0;
+  CHECK(unsure == 12);  // (dx, dy) with 0 < dx^2 + dy^2 <= 4: 4 + 4 + 4
+  std::vector<std::uint8_t> untouched(81, 255);
+  vcar::widen_outer_band(m, 0.0, untouched);
+  CHECK(untouched == std::vector<std::uint8_t>(81, 255));
+}
