@@ -142,7 +142,8 @@ const std::vector<std::string> kPeers = {"naive", "sagd", "flashsplat", "gaussia
 const std::vector<std::string> kVariants = {"coarse", "sss", "abr", "full", "occlusion", "gapdir", "robust"};
 // The robust preset with one mechanism switched off each (docs/robust.md ablation).
 const std::vector<std::string> kRobustAblation = {"robust-noband", "robust-noocc", "robust-nokeep",
-                                                  "robust-lowpass", "robust-tau08"};
+                                                  "robust-lowpass", "robust-tau08", "robust-nofs",
+                                                  "robust-noundershoot"};
 
 std::vector<std::string> all_methods(bool variants = true) {
   std::vector<std::string> m = kPeers;
@@ -178,6 +179,8 @@ VcarParams vcar_params(const std::string& variant, const Experiment& e, const st
     else if (variant == "robust-nokeep") p.keep_unseen = false;
     else if (variant == "robust-lowpass") p.abr_lowpass = true;
     else if (variant == "robust-tau08") p.tau_fine = 0.8f;
+    else if (variant == "robust-nofs") p.foreshortening = false;
+    else if (variant == "robust-noundershoot") p.undershoot_band = 0.f;
     else if (variant != "robust") throw Error("unknown variant '" + variant + "'", "--methods");
     if (e.failure == "tau") { p.tau_coarse = static_cast<float>(e.level); p.tau_fine = static_cast<float>(e.level); }
     for (const std::string& kv : set) io::set_parameter(p, kv);
