@@ -202,7 +202,7 @@ public:
     else if (depth) paper_->add_view(cam, m, depth, alpha, tolerance);
     else paper_->add_view(cam, m);
   }
-  // Eq. 3 (paper) or Eq. R2-R4 (robust): ascending scene indices and their scores.
+  // Eq. 3 (paper) or Eq. R2-R6 (robust): ascending scene indices and their scores.
   void selected(float tau, std::vector<Index>& indices, std::vector<float>& scores) const {
     if (robust_) return robust_->selected(tau, undecided_kept_, keep_unseen_, indices, scores);
     indices = paper_->selected(tau);

@@ -1,7 +1,7 @@
 #pragma once
 // Beyond the paper: visibility-based voting that weighs evidence by how reliable it is
-// (docs/robust.md, Eq. R1-R4). With edge_band = 0, no depth images and keep_unseen off it is
-// exactly Eq. 1-3 (VisibilityVoting).
+// (docs/robust.md, Eq. R1-R6). With edge_band = 0, no depth images and keep_unseen,
+// foreshortening and gamma off it is exactly Eq. 1-3 (VisibilityVoting).
 //
 // Per candidate i and view j where the centre is visible by Eq. 1 at pixel p, three nested
 // kinds of evidence, each a pair of uint16 counters (12 bytes per candidate, whatever the
