@@ -18,7 +18,8 @@
 // State: the voter (Morton-sorted means and counters, ~20 bytes per Gaussian), the masks
 // run-length encoded (O(boundary) bytes each) and the last refinement (~90 bytes per selected
 // Gaussian). The vote is the paper's (Eq. 1-3): parameters
-// whose vote needs renders (edge band, occlusion tests, keep_unseen) are refused.
+// of the robust vote (edge band, occlusion tests, keep_unseen, foreshortening, undershoot band)
+// are refused: its levels are not yet taken back view by view.
 #include <cstddef>
 #include <memory>
 #include <optional>
@@ -47,8 +48,9 @@ public:
         abr_masks_(cameras_.size()) {
     params_.validate();
     if (params_.robust_vote())
-      throw Error("re-selection votes with Eq. 1-3 only; edge_band, coarse/fine_occlusion and keep_unseen need "
-                  "renders (use a paper preset such as VcarParams::nvos(), or vcar::segment)", "Reselection");
+      throw Error("re-selection votes with Eq. 1-3 only; the robust vote (edge_band, coarse/fine_occlusion, "
+                  "keep_unseen, foreshortening, undershoot_band) needs renders and is not incremental (use a paper preset such as "
+                  "VcarParams::nvos(), or vcar::segment)", "Reselection");
     if (params_.occlusion_aware) throw Error("occlusion_aware needs renders (use vcar::segment)", "Reselection");
     if (scene.empty()) throw Error("the scene has no Gaussians", "scene");
     if (cameras_.empty()) throw Error("no training cameras", "cameras");
