@@ -49,8 +49,8 @@ public:
     params_.validate();
     if (params_.robust_vote())
       throw Error("re-selection votes with Eq. 1-3 only; the robust vote (edge_band, coarse/fine_occlusion, "
-                  "keep_unseen, foreshortening, undershoot_band) needs renders and is not incremental (use a paper preset such as "
-                  "VcarParams::nvos(), or vcar::segment)", "Reselection");
+                  "keep_unseen, foreshortening, undershoot_band) needs renders and is not incremental (use a "
+                  "paper preset such as VcarParams::nvos(), or vcar::segment)", "Reselection");
     if (params_.occlusion_aware) throw Error("occlusion_aware needs renders (use vcar::segment)", "Reselection");
     if (scene.empty()) throw Error("the scene has no Gaussians", "scene");
     if (cameras_.empty()) throw Error("no training cameras", "cameras");
