@@ -5,16 +5,10 @@
 
 #include "vcar/algo/edge_band.hpp"
 
+#include "square_mask.hpp"
+
 using vcar::Mask;
 
-namespace {
-Mask square_mask(int W, int H, int x0, int y0, int x1, int y1) {  // [x0, x1) x [y0, y1) foreground
-  Mask m(W, H, 1);
-  for (int y = y0; y < y1; ++y)
-    for (int x = x0; x < x1; ++x) m.data[static_cast<std::size_t>(y) * W + x] = 255;
-  return m;
-}
-}  // namespace
 
 TEST_CASE("Eq. R1a: band half-width from the mask's equivalent radius") {
   // A = pi r^2 with r = 50: w = round(0.1 * 50) = 5.

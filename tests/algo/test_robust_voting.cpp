@@ -6,6 +6,7 @@
 #include "vcar/algo/visibility_voting.hpp"
 
 #include "point_scene.hpp"
+#include "square_mask.hpp"
 
 using vcar::Camera;
 using vcar::ImageF;
@@ -20,12 +21,7 @@ Camera cam20(const char* name) {
   c.width = 20; c.height = 20; c.fx = 10; c.fy = 10; c.cx = 10; c.cy = 10;
   return c;
 }
-Mask square(int x0, int y0, int x1, int y1) {
-  Mask m(20, 20, 1);
-  for (int y = y0; y < y1; ++y)
-    for (int x = x0; x < x1; ++x) m.data[static_cast<std::size_t>(y) * 20 + x] = 255;
-  return m;
-}
+Mask square(int x0, int y0, int x1, int y1) { return square_mask(20, 20, x0, y0, x1, y1); }
 }  // namespace
 
 TEST_CASE("Eq. R1-R2 by hand: centre, band and outside pixels of a 10x10 square") {

@@ -4,16 +4,12 @@
 
 #include "vcar/algo/undershoot.hpp"
 
+#include "square_mask.hpp"
+
 using vcar::ImageF;
 using vcar::Mask;
 
 namespace {
-Mask square_mask(int n, int x0, int x1) {
-  Mask m(n, n, 1);
-  for (int y = x0; y < x1; ++y)
-    for (int x = x0; x < x1; ++x) m.data[static_cast<std::size_t>(y) * n + x] = 255;
-  return m;
-}
 ImageF square_alpha(int n, int x0, int x1) {
   ImageF a(n, n, 1);
   for (int y = x0; y < x1; ++y)
@@ -26,16 +22,16 @@ TEST_CASE("Eq. R6a by hand: a mask 3 px inside the render undershoots by 3, the 
   const ImageF alpha = square_alpha(20, 5, 15);  // render [5, 15)^2
   // Mask [8, 12)^2: every contour pixel is 4 px (centre to centre) from the render's background
   // (x = 4 or 15, y likewise): e = 4 - 1 = 3.
-  CHECK(vcar::undershoot_px(square_mask(20, 8, 12), alpha) == 3.0);
+  CHECK(vcar::undershoot_px(square_mask(20, 20, 8, 8, 12, 12), alpha) == 3.0);
   // The mask is the render: contour pixels touch the background at distance 1: e = 0.
-  CHECK(vcar::undershoot_px(square_mask(20, 5, 15), alpha) == 0.0);
+  CHECK(vcar::undershoot_px(square_mask(20, 20, 5, 5, 15, 15), alpha) == 0.0);
   // A dilated mask: its contour lies in the render's background: e = 0.
-  CHECK(vcar::undershoot_px(square_mask(20, 2, 18), alpha) == 0.0);
+  CHECK(vcar::undershoot_px(square_mask(20, 20, 2, 2, 18, 18), alpha) == 0.0);
   // No mask, or a render without background: nothing to measure.
   CHECK(vcar::undershoot_px(Mask(20, 20, 1), alpha) == 0.0);
-  CHECK(vcar::undershoot_px(square_mask(20, 8, 12), square_alpha(20, 0, 20)) == 0.0);
+  CHECK(vcar::undershoot_px(square_mask(20, 20, 8, 8, 12, 12), square_alpha(20, 0, 20)) == 0.0);
   // The image border is not a contour: a full mask has none.
-  CHECK(vcar::undershoot_px(square_mask(20, 0, 20), alpha) == 0.0);
+  CHECK(vcar::undershoot_px(square_mask(20, 20, 0, 0, 20, 20), alpha) == 0.0);
 }
 
 TEST_CASE("Eq. R6a is a median: a foreground blob of G_coarse that the mask leaves out does not move it") {
@@ -45,7 +41,7 @@ TEST_CASE("Eq. R6a is a median: a foreground blob of G_coarse that the mask leav
   ImageF alpha = square_alpha(20, 5, 15);
   for (int y = 5; y < 9; ++y)
     for (int x = 15; x < 19; ++x) alpha.data[static_cast<std::size_t>(y) * 20 + x] = 1.f;
-  CHECK(vcar::undershoot_px(square_mask(20, 5, 15), alpha) == 0.0);
+  CHECK(vcar::undershoot_px(square_mask(20, 20, 5, 5, 15, 15), alpha) == 0.0);
 }
 
 TEST_CASE("Eq. R6b by hand: background pixels within the reach (Euclidean) of the foreground become unsure") {

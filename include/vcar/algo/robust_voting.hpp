@@ -67,7 +67,7 @@ public:
   std::size_t chunk = 4096;                        // candidates per parallel task (fixed)
 
   // Every Gaussian of `scene` is a candidate (means referenced: the scene must outlive this).
-  // beta: Eq. R1a band factor (0 = off).
+  // The (beta, kappa) forms are the options with R5 and R6 off.
   RobustVoting(const GaussianScene& scene, const RobustVoteOptions& o) : o_(o) {
     init(scene, scene.mean[0].data(), scene.mean[1].data(), scene.mean[2].data(), scene.size());
   }
@@ -166,7 +166,6 @@ public:
   float weighted_foreground(std::size_t k, int level) const { return o_.foreshortening ? w_[2 * level - 1][k] : 0.f; }
   // Eq. R6a of the latest view voted with gamma > 0 and a render (px).
   double last_undershoot_px() const noexcept { return last_undershoot_; }
-  const RobustVoteOptions& options() const noexcept { return o_; }
 
   // Eq. R2 (Eq. 3 at level 0), with Eq. R5's sums at levels 1-2 when foreshortening is on.
   float ratio(std::size_t k) const {
@@ -175,8 +174,8 @@ public:
     // exactly ((F + kappa F/V) / (V + kappa) = F/V): keep R bit for bit instead of rounding it
     // again (FMA or not), so Eq. 3 comes out identical whenever the mechanisms add nothing.
     bool plain = true;
+    const float kappa = o_.kappa;
     for (int level = 1; level <= 2; ++level) {
-      const float kappa = o_.kappa;
       if (o_.foreshortening) {
         const float V = weight(k, level), F = weighted_foreground(k, level);
         if (V + kappa > 0.f) R = (F + kappa * R) / (V + kappa);
