@@ -141,9 +141,9 @@ struct Options {
 const std::vector<std::string> kPeers = {"naive", "sagd", "flashsplat", "gaussiancut", "ludvig", "lbg"};
 const std::vector<std::string> kVariants = {"coarse", "sss", "abr", "full", "occlusion", "gapdir", "robust"};
 // The robust preset with one mechanism switched off each (docs/robust.md ablation).
-const std::vector<std::string> kRobustAblation = {"robust-noband", "robust-noocc", "robust-nokeep",
+const std::vector<std::string> kRobustAblation = {"robust-band", "robust-noocc", "robust-nokeep",
                                                   "robust-lowpass", "robust-tau08", "robust-nofs",
-                                                  "robust-noundershoot"};
+                                                  "robust-noundershoot", "robust-nostrict"};
 
 std::vector<std::string> all_methods(bool variants = true) {
   std::vector<std::string> m = kPeers;
@@ -174,13 +174,14 @@ bool is_360(const std::string& rig) { return rig != "forward"; }
 VcarParams vcar_params(const std::string& variant, const Experiment& e, const std::vector<std::string>& set) {
   if (variant.rfind("robust", 0) == 0) {  // one preset for every rig: the library's default
     VcarParams p = VcarParams::robust();
-    if (variant == "robust-noband") p.edge_band = 0.f;
+    if (variant == "robust-band") p.edge_band = 0.1f;
     else if (variant == "robust-noocc") p.fine_occlusion = false;
     else if (variant == "robust-nokeep") p.keep_unseen = false;
     else if (variant == "robust-lowpass") p.abr_lowpass = true;
     else if (variant == "robust-tau08") p.tau_fine = 0.8f;
     else if (variant == "robust-nofs") p.foreshortening = false;
     else if (variant == "robust-noundershoot") p.undershoot_band = 0.f;
+    else if (variant == "robust-nostrict") p.tau_strict = 0.f;
     else if (variant != "robust") throw Error("unknown variant '" + variant + "'", "--methods");
     if (e.failure == "tau") { p.tau_coarse = static_cast<float>(e.level); p.tau_fine = static_cast<float>(e.level); }
     for (const std::string& kv : set) io::set_parameter(p, kv);

@@ -24,8 +24,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RIGS = ["forward", "orbit", "sparse", "hemisphere"]
 PEERS = ["naive", "sagd", "flashsplat", "gaussiancut", "ludvig", "lbg"]
 VARIANTS = ["coarse", "sss", "abr", "full", "occlusion", "gapdir", "robust"]
-ROBUST_ABLATION = ["robust-noband", "robust-noocc", "robust-nokeep", "robust-lowpass", "robust-tau08", "robust-nofs",
-                   "robust-noundershoot"]
+ROBUST_ABLATION = ["robust-band", "robust-noocc", "robust-nokeep", "robust-lowpass", "robust-tau08", "robust-nofs",
+                   "robust-noundershoot", "robust-nostrict"]
 TARGETS = ["sphere", "torus", "cylinder", "box"]
 NUM = {"seed", "gaussians", "object_gaussians", "level", "width", "height", "n_train", "n_eval", "miou", "macc",
        "miou_01", "macc_01", "boundary_iou", "boundary_f1", "trimap_iou", "f1_3d", "precision_3d", "recall_3d",
@@ -75,10 +75,11 @@ def group(rows, keys):
 def label(key):
     return {"vcar:full": "VCAR", "vcar:coarse": "VCAR coarse", "vcar:sss": "VCAR +SSS", "vcar:abr": "VCAR +ABR",
             "vcar:occlusion": "VCAR occl.", "vcar:gapdir": "VCAR gap-dir.", "vcar:robust": "vcar robust",
-            "vcar:robust-noband": "robust - band (R1)", "vcar:robust-noocc": "robust - fine occlusion (R3)",
+            "vcar:robust-band": "robust + band (R1)", "vcar:robust-noocc": "robust - fine occlusion (R3)",
             "vcar:robust-nokeep": "robust - keep unseen (R4)", "vcar:robust-lowpass": "robust + ABR low-pass",
             "vcar:robust-tau08": "robust, tau_fine 0.8", "vcar:robust-nofs": "robust - foreshortening (R5)",
-            "vcar:robust-noundershoot": "robust - undershoot band (R6)"}.get(key, key)
+            "vcar:robust-noundershoot": "robust - undershoot band (R6)",
+            "vcar:robust-nostrict": "robust - decisive threshold (R7)"}.get(key, key)
 
 
 STYLE = {}

@@ -525,6 +525,7 @@ nlohmann::json write_segmentation(const std::filesystem::path& out, const Gaussi
       {"max_gap_deg", d.max_gap_deg},
       {"gap_direction", {d.gap_direction.x(), d.gap_direction.y(), d.gap_direction.z()}},
       {"sss_triggered", d.sss_triggered},
+      {"tau_fine_applied", d.tau_fine_applied},
       {"sphere", {{"center", {d.sphere.c.x(), d.sphere.c.y(), d.sphere.c.z()}}, {"radius", d.sphere.r},
                   {"inliers", d.sphere.inliers}}},
       {"sampled_views", d.sampled_cameras.size()},

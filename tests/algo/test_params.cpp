@@ -71,12 +71,13 @@ TEST_CASE("validate names the parameter at fault") {
 
 TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond the paper; the paper presets none") {
   const auto r = VcarParams::robust();
-  CHECK(r.edge_band > 0.f);
+  CHECK(r.edge_band == 0.f);  // R1: superseded by R6-R7 (docs/robust.md), a switch only
   CHECK(r.fine_occlusion);
   CHECK(r.coarse_occlusion);
   CHECK(r.keep_unseen);
   CHECK(r.foreshortening);
   CHECK(r.undershoot_band > 0.f);
+  CHECK(r.tau_strict > r.tau_fine);
   CHECK_FALSE(r.abr_lowpass);
   CHECK(r.kappa == 2.f);
   CHECK(r.robust_vote());
@@ -86,6 +87,7 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
     CHECK(p.edge_band == 0.f);
     CHECK_FALSE(p.foreshortening);
     CHECK(p.undershoot_band == 0.f);
+    CHECK(p.tau_strict <= p.tau_fine);  // Eq. R7 off
     CHECK(p.abr_lowpass);
   }
   CHECK(VcarParams::reference_code().force_fine_round);
@@ -106,6 +108,9 @@ TEST_CASE("validate: rho = 1 can never trigger the strict gate, and the robust p
   p = {}; p.undershoot_band = -1.f; CHECK(where_of(p) == "undershoot_band");
   p = {}; p.undershoot_band = NAN;  CHECK(where_of(p) == "undershoot_band");
   p = {}; p.undershoot_band = 2.f;  CHECK(where_of(p) == "");
+  p = {}; p.tau_strict = 1.2f;      CHECK(where_of(p) == "tau_strict");
+  p = {}; p.split_fraction = -0.1f; CHECK(where_of(p) == "split_fraction");
+  p = {}; p.split_fraction = NAN;   CHECK(where_of(p) == "split_fraction");
   // Each mechanism alone makes the vote RobustVoting's.
   p = {}; p.foreshortening = true;  CHECK(p.robust_vote());
   p = {}; p.undershoot_band = 1.f;  CHECK(p.robust_vote());

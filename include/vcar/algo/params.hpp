@@ -95,6 +95,11 @@ struct VcarParams {
   // mask are no evidence, e_j the mask's undershoot measured against the render of G_coarse;
   // 0 = off.
   float undershoot_band = 0.f;
+  // Eq. R7: the fine round keeps tau_strict instead of tau_fine when the vote is decisive, i.e.
+  // when at most a fraction split_fraction of the Gaussians kept at tau_fine fall below
+  // tau_strict; tau_strict <= tau_fine (0) = off.
+  float tau_strict = 0.f;
+  float split_fraction = 0.1f;
   // Eq. 9-13 read Sigma2D with the renderer's eps2d low-pass (conventions §3, true) or the
   // Gaussian's own footprint (false: overflow within ~1.6 px no longer forces f_min).
   bool abr_lowpass = true;
@@ -126,20 +131,22 @@ struct VcarParams {
     p.force_fine_round = true;
     return p;
   }
-  // vcar's default (beyond the paper, docs/robust.md): tau_coarse 0.5, tau_fine 0.5, the edge
-  // band (R1-R2), the occlusion test in both rounds (R3), unseen fine candidates kept (R4),
-  // views weighted by foreshortening (R5), the fine round's band widened to the masks' measured
-  // undershoot (R6) and ABR on the Gaussians' own footprints. What vcar::segment uses when
-  // given no parameters.
+  // vcar's default (beyond the paper, docs/robust.md): tau_coarse 0.5, tau_fine 0.5, the
+  // evidence levels (R2) with the occlusion test in both rounds (R3), unseen fine candidates kept
+  // (R4), views weighted by foreshortening (R5), the fine round's band as wide as the masks'
+  // measured undershoot (R6), the strict threshold 0.85 when the fine vote is decisive (R7) and
+  // ABR on the Gaussians' own footprints. The edge band (R1) is off: R6-R7 do its work
+  // (docs/results.md, ablation). What vcar::segment uses when given no parameters.
   static VcarParams robust() {
     VcarParams p;
     p.tau_fine = 0.5f;
-    p.edge_band = 0.1f;
     p.fine_occlusion = true;
     p.coarse_occlusion = true;
     p.keep_unseen = true;
     p.foreshortening = true;
     p.undershoot_band = 1.5f;
+    p.tau_strict = 0.85f;
+    p.split_fraction = 0.1f;
     p.abr_lowpass = false;
     return p;
   }
@@ -187,7 +194,8 @@ struct VcarParams {
     f("force_fine_round", p.force_fine_round); f("edge_band", p.edge_band);
     f("fine_occlusion", p.fine_occlusion); f("coarse_occlusion", p.coarse_occlusion);
     f("keep_unseen", p.keep_unseen); f("keep_undecided", p.keep_undecided); f("kappa", p.kappa);
-    f("foreshortening", p.foreshortening); f("undershoot_band", p.undershoot_band); f("abr_lowpass", p.abr_lowpass);
+    f("foreshortening", p.foreshortening); f("undershoot_band", p.undershoot_band);
+    f("tau_strict", p.tau_strict); f("split_fraction", p.split_fraction); f("abr_lowpass", p.abr_lowpass);
   }
 
   // Throws vcar::Error naming the first parameter outside its range.
@@ -226,6 +234,8 @@ struct VcarParams {
     if (!(kappa >= 0.f && std::isfinite(kappa))) bad("kappa", "must be >= 0, got " + std::to_string(kappa));
     if (!(undershoot_band >= 0.f && undershoot_band <= 100.f))
       bad("undershoot_band", "must be in [0, 100] (0 = off), got " + std::to_string(undershoot_band));
+    unit("tau_strict", tau_strict);
+    unit("split_fraction", split_fraction);
     if (!(edge_band >= 0.f && edge_band <= 1.f)) bad("edge_band", "must be in [0, 1] (0 = off), got " + std::to_string(edge_band));
   }
 

@@ -20,6 +20,7 @@
 
 #include "vcar/algo/robust_voting.hpp"
 #include "vcar/algo/boundary_refinement.hpp"
+#include "vcar/algo/decisive_threshold.hpp"
 #include "vcar/algo/params.hpp"
 #include "vcar/algo/robust_sphere.hpp"
 #include "vcar/algo/spiral_sampler.hpp"
@@ -57,6 +58,7 @@ struct Diagnostics {
   double max_gap_deg = 0;           // Delta_max (Eq. 6)
   Eigen::Vector3f gap_direction = Eigen::Vector3f::Zero();
   bool sss_triggered = false;
+  float tau_fine_applied = 0.f;     // the fine round's threshold (Eq. R7: tau_fine or tau_strict); 0: no fine round
   std::vector<Camera> sampled_cameras;  // V_sampled
   ObjectSphere sphere{};
   std::size_t abr_flagged = 0, abr_compressed = 0;
@@ -208,6 +210,19 @@ public:
     indices = paper_->selected(tau);
     scores.clear();
     for (Index i : indices) scores.push_back(paper_->ratio_of(i));
+  }
+  // The same with Eq. R7 choosing between tau and tau_strict (> tau; else tau); returns the
+  // threshold applied.
+  float selected(float tau, float tau_strict, float split, std::vector<Index>& indices, std::vector<float>& scores) const {
+    selected(tau, indices, scores);
+    if (!(tau_strict > tau)) return tau;
+    std::vector<Index> strict;
+    std::vector<float> strict_scores;
+    selected(tau_strict, strict, strict_scores);
+    if (!decisive_vote(strict.size(), indices.size(), split)) return tau;                   // Eq. R7
+    indices = std::move(strict);
+    scores = std::move(strict_scores);
+    return tau_strict;
   }
 
 private:
@@ -373,7 +388,7 @@ bool refine(const GaussianScene& scene, const std::vector<Camera>& train_cameras
     timing("fine_render", t2.render);
     timing("fine_segment", t2.total - t2.render - t2.voting);
     timing("fine_voting", t2.voting);
-    fine.selected(params.tau_fine, selected, scores);
+    diag.tau_fine_applied = fine.selected(params.tau_fine, params.tau_strict, params.split_fraction, selected, scores);
     diag.n_fine = diag.n_final = selected.size();
     if (selected.empty()) {
       diag.note = "the fine vote kept no Gaussian (tau_fine too high for these masks?)";

@@ -1,0 +1,72 @@
+#include <catch2/catch.hpp>
+
+#include "vcar/algo/decisive_threshold.hpp"
+#include "vcar/algo/pipeline.hpp"
+
+#include "point_scene.hpp"
+#include "square_mask.hpp"
+
+using vcar::Index;
+
+TEST_CASE("Eq. R7 by hand: decisive when N(tau_strict) >= (1 - s) N(tau_fine)") {
+  CHECK(vcar::decisive_vote(90, 100, 0.1f));    // 90 >= 0.9 * 100
+  CHECK_FALSE(vcar::decisive_vote(89, 100, 0.1f));
+  CHECK(vcar::decisive_vote(100, 100, 0.f));    // s = 0: only a vote with nothing in between
+  CHECK_FALSE(vcar::decisive_vote(99, 100, 0.f));
+  CHECK(vcar::decisive_vote(0, 100, 1.f));      // s = 1: always strict
+  CHECK(vcar::decisive_vote(0, 0, 0.1f));       // nothing kept either way
+}
+
+namespace {
+// Identity pose, fx = fy = 10, principal point (10, 10), 20 x 20: u = 10 x / z + 10.
+vcar::Camera cam20() {
+  vcar::Camera c;
+  c.name = "v";
+  c.width = 20; c.height = 20; c.fx = 10; c.fy = 10; c.cx = 10; c.cy = 10;
+  return c;
+}
+
+// Nine Gaussians inside every mask (R = 1) and one, at pixel (1, 10), inside 6 of 10 (R = 0.6):
+// N(0.5) = 10, N(0.85) = 9. The fine round's vote, paper or robust, over the ten views.
+std::vector<Index> fine_selection(const vcar::VcarParams& p, float* applied) {
+  std::vector<Eigen::Vector3f> mus;
+  for (int k = 0; k < 9; ++k) mus.push_back({-0.25f + 0.05f * static_cast<float>(k), 0.05f, 1.f});  // pixels 7.5-11.5
+  mus.push_back({-0.85f, 0.05f, 1.f});
+  const vcar::GaussianScene scene = scene_of(mus);
+  std::vector<Index> all(10);
+  for (Index i = 0; i < 10; ++i) all[i] = i;
+  vcar::detail::RoundVote fine(scene, &all, p, true);
+  const vcar::Mask whole = square_mask(20, 20, 0, 0, 20, 20), inner = square_mask(20, 20, 5, 5, 15, 15);
+  const vcar::Camera c = cam20();
+  for (int v = 0; v < 10; ++v) fine.add_view(c, v < 6 ? &whole : &inner, nullptr, p.depth_tolerance);
+  std::vector<Index> idx;
+  std::vector<float> scores;
+  *applied = fine.selected(p.tau_fine, p.tau_strict, p.split_fraction, idx, scores);
+  REQUIRE(idx.size() == scores.size());
+  return idx;
+}
+}  // namespace
+
+TEST_CASE("Eq. R7 in the fine round: a decisive vote takes tau_strict, a split one keeps tau_fine") {
+  const std::vector<Index> nine{0, 1, 2, 3, 4, 5, 6, 7, 8};
+  std::vector<Index> ten = nine;
+  ten.push_back(9);
+  for (vcar::VcarParams p : {vcar::VcarParams::robust(), vcar::VcarParams::nvos()}) {
+    p.tau_fine = 0.5f;
+    p.tau_strict = 0.85f;
+    float applied = -1.f;
+    p.split_fraction = 0.1f;  // 9 >= 0.9 * 10: decisive
+    CHECK(fine_selection(p, &applied) == nine);
+    CHECK(applied == 0.85f);
+    p.split_fraction = 0.05f;  // 9 < 0.95 * 10: split
+    CHECK(fine_selection(p, &applied) == ten);
+    CHECK(applied == 0.5f);
+    p.split_fraction = 0.1f;
+    p.tau_strict = 0.f;  // off
+    CHECK(fine_selection(p, &applied) == ten);
+    CHECK(applied == 0.5f);
+    p.tau_strict = 0.55f;  // R = 0.6 passes the strict threshold too
+    CHECK(fine_selection(p, &applied) == ten);
+    CHECK(applied == 0.55f);
+  }
+}
