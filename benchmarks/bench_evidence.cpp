@@ -140,7 +140,8 @@ struct Options {
 
 const std::vector<std::string> kPeers = {"naive", "sagd", "flashsplat", "gaussiancut", "ludvig", "lbg"};
 const std::vector<std::string> kVariants = {"coarse", "sss", "abr", "full", "occlusion", "gapdir", "robust"};
-// The robust preset with one mechanism switched off each (docs/robust.md ablation).
+// The robust preset with one mechanism changed each (docs/robust.md ablation): off, or for the
+// edge band R1 (off in robust) on.
 const std::vector<std::string> kRobustAblation = {"robust-band", "robust-noocc", "robust-nokeep",
                                                   "robust-lowpass", "robust-tau08", "robust-nofs",
                                                   "robust-noundershoot", "robust-nostrict"};
