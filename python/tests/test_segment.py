@@ -65,6 +65,11 @@ def test_oracle_identical_to_cli(cli_dataset, tmp_path, preset):
                                                            report["counts"]["final"])
     assert d["sss_triggered"] == report["sss_triggered"]
     assert d["max_gap_deg"] == pytest.approx(report["max_gap_deg"], abs=0)
+    # Eq. R7: the fine round's threshold, tau_fine or (robust, a decisive vote) tau_strict; 0 without one.
+    assert d["tau_fine_applied"] == pytest.approx(report["tau_fine_applied"])
+    fine_round = d["sss_triggered"] or preset == "reference_code"  # reference_code forces the round
+    allowed = {"robust": [0.5, 0.85], "nvos": [0.8], "reference_code": [0.9]}[preset] if fine_round else [0.0]
+    assert any(d["tau_fine_applied"] == pytest.approx(t) for t in allowed)
 
 
 def test_masks_identical_to_cli_with_python_segmenter(cli_dataset, tmp_path):
