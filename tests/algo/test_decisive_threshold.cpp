@@ -18,14 +18,6 @@ TEST_CASE("Eq. R7 by hand: decisive when N(tau_strict) >= (1 - s) N(tau_fine)") 
 }
 
 namespace {
-// Identity pose, fx = fy = 10, principal point (10, 10), 20 x 20: u = 10 x / z + 10.
-vcar::Camera cam20() {
-  vcar::Camera c;
-  c.name = "v";
-  c.width = 20; c.height = 20; c.fx = 10; c.fy = 10; c.cx = 10; c.cy = 10;
-  return c;
-}
-
 // Nine Gaussians inside every mask (R = 1) and one, at pixel (1, 10), inside 6 of 10 (R = 0.6):
 // N(0.5) = 10, N(0.85) = 9. The fine round's vote, paper or robust, over the ten views.
 std::vector<Index> fine_selection(const vcar::VcarParams& p, float* applied) {

@@ -14,13 +14,6 @@ using vcar::Index;
 using vcar::Mask;
 
 namespace {
-// Identity pose, fx = fy = 10, principal point (10, 10), 20 x 20: u = 10 x / z + 10.
-Camera cam20(const char* name) {
-  Camera c;
-  c.name = name;
-  c.width = 20; c.height = 20; c.fx = 10; c.fy = 10; c.cx = 10; c.cy = 10;
-  return c;
-}
 Mask square(int x0, int y0, int x1, int y1) { return square_mask(20, 20, x0, y0, x1, y1); }
 }  // namespace
 
