@@ -144,7 +144,7 @@ const std::vector<std::string> kVariants = {"coarse", "sss", "abr", "full", "occ
 // edge band R1 (off in robust) on.
 const std::vector<std::string> kRobustAblation = {"robust-band", "robust-noocc", "robust-nokeep",
                                                   "robust-lowpass", "robust-tau08", "robust-nofs",
-                                                  "robust-noundershoot", "robust-nostrict"};
+                                                  "robust-noundershoot", "robust-nostrict", "robust-noabru"};
 
 std::vector<std::string> all_methods(bool variants = true) {
   std::vector<std::string> m = kPeers;
@@ -183,6 +183,7 @@ VcarParams vcar_params(const std::string& variant, const Experiment& e, const st
     else if (variant == "robust-nofs") p.foreshortening = false;
     else if (variant == "robust-noundershoot") p.undershoot_band = 0.f;
     else if (variant == "robust-nostrict") p.tau_strict = 0.f;
+    else if (variant == "robust-noabru") p.abr_undershoot = false;
     else if (variant != "robust") throw Error("unknown variant '" + variant + "'", "--methods");
     if (e.failure == "tau") { p.tau_coarse = static_cast<float>(e.level); p.tau_fine = static_cast<float>(e.level); }
     for (const std::string& kv : set) io::set_parameter(p, kv);

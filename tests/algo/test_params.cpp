@@ -79,6 +79,7 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
   CHECK(r.undershoot_band > 0.f);
   CHECK(r.tau_strict > r.tau_fine);
   CHECK_FALSE(r.abr_lowpass);
+  CHECK(r.abr_undershoot);  // R8
   CHECK(r.kappa == 2.f);
   CHECK(r.robust_vote());
   CHECK_NOTHROW(r.validate());
@@ -89,6 +90,7 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
     CHECK(p.undershoot_band == 0.f);
     CHECK(p.tau_strict <= p.tau_fine);  // Eq. R7 off
     CHECK(p.abr_lowpass);
+    CHECK_FALSE(p.abr_undershoot);
   }
   CHECK(VcarParams::reference_code().force_fine_round);
   CHECK_FALSE(VcarParams::nvos().force_fine_round);

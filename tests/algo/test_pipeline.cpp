@@ -250,6 +250,66 @@ TEST_CASE("robust preset: fine-round frames render a subset (FrameSequence::subs
   CHECK(renders >= static_cast<int>(cams.size() + cams.size() + 32));
 }
 
+TEST_CASE("Eq. R8: ABR reads the training masks widened by their undershoot only when the fine vote is split") {
+  auto w = two_blobs();
+  const auto cams = forward_rig();
+  // Renders of a subset (the fine round) show blob A's disc, depth far behind every Gaussian (no
+  // occlusion); renders of the whole scene are blank.
+  auto renderer = vcar::make_renderer([&](const vcar::RenderRequest& q) {
+    vcar::RenderOutput out;
+    out.rgb = vcar::ImageF(q.camera->width, q.camera->height, 3, 0.f);
+    out.alpha = vcar::ImageF(q.camera->width, q.camera->height, 1, 0.f);
+    if (q.subset) {
+      const vcar::Mask disc = blob_a_mask(*q.camera);
+      for (std::size_t k = 0; k < disc.data.size(); ++k) out.alpha.data[k] = disc.data[k] ? 1.f : 0.f;
+    }
+    if (q.want_depth) {
+      out.depth = out.alpha;
+      for (float& d : out.depth.data) d *= 100.f;
+    }
+    return out;
+  });
+  // The coarse round gets blob A's disc; the fine round the disc eroded by `erode` px.
+  int erode = 0;
+  auto seg = vcar::make_segmenter([&](const vcar::FrameSequence& f, const vcar::Prompt&) {
+    std::vector<std::optional<vcar::Mask>> masks;
+    for (const auto& c : f.cameras) {
+      const vcar::Mask m = blob_a_mask(c);
+      vcar::Mask e = m;
+      for (int y = 0; y < m.height; ++y)
+        for (int x = 0; x < m.width; ++x)
+          for (int d = 1; d <= erode && e(x, y); ++d)
+            if (x - d < 0 || x + d >= m.width || y - d < 0 || y + d >= m.height || !m(x - d, y) || !m(x + d, y) ||
+                !m(x, y - d) || !m(x, y + d))
+              e(x, y) = 0;
+      masks.emplace_back(f.subset ? e : m);
+    }
+    return masks;
+  });
+  vcar::Prompt prompt;
+  prompt.reference_view = 4;
+  auto p = vcar::VcarParams::robust();
+  p.force_fine_round = true;
+  auto run = [&](int px) {
+    erode = px;
+    return vcar::segment(w.scene, cams, prompt, renderer, seg, p).diagnostics;
+  };
+  // Masks 5 px inside the render: blob A's rim falls outside them in every view, the vote splits.
+  const vcar::Diagnostics eroded = run(5);
+  REQUIRE(eroded.tau_fine_applied == p.tau_fine);
+  CHECK(eroded.abr_masks_widened == cams.size());  // every training view has an undershooting mask
+  // Exact masks: a decisive vote, ABR reads them as they are.
+  const vcar::Diagnostics exact = run(0);
+  REQUIRE(exact.tau_fine_applied == p.tau_strict);
+  CHECK(exact.abr_masks_widened == 0);
+  // Switched off, or in the paper's preset: never.
+  p.abr_undershoot = false;
+  CHECK(run(5).abr_masks_widened == 0);
+  p = vcar::VcarParams::nvos();
+  p.force_fine_round = true;
+  CHECK(run(5).abr_masks_widened == 0);
+}
+
 TEST_CASE("pipeline: bad input and edge cases") {
   auto w = two_blobs(100);
   const auto cams = forward_rig();

@@ -62,3 +62,33 @@ TEST_CASE("Eq. R6b by hand: background pixels within the reach (Euclidean) of th
   vcar::widen_outer_band(m, 0.0, untouched);
   CHECK(untouched == std::vector<std::uint8_t>(81, 255));
 }
+
+TEST_CASE("Eq. R8 by hand: the mask grows by every background pixel within e (Euclidean) of its foreground") {
+  Mask m(9, 9, 1);
+  m.data[4 * 9 + 4] = 255;  // one pixel at (4, 4)
+  auto count = [](const Mask& k) {
+    int n = 0;
+    for (auto v : k.data) n += v != 0;
+    return n;
+  };
+  Mask a = m;
+  vcar::dilate_by_undershoot(a, 1.0);
+  CHECK(count(a) == 5);  // the pixel and its 4-neighbours
+  Mask b = m;
+  vcar::dilate_by_undershoot(b, 1.5);
+  CHECK(count(b) == 9);  // the 3 x 3 block (sqrt 2 <= 1.5)
+  Mask c = m;
+  vcar::dilate_by_undershoot(c, 2.0);
+  CHECK(count(c) == 13);  // 1 + 12, the pixels Eq. R6b marks unsure at the same reach
+  CHECK(c.data[4 * 9 + 6] == 255);
+  CHECK(c.data[5 * 9 + 6] == 0);  // sqrt 5 > 2
+  Mask d = m;
+  vcar::dilate_by_undershoot(d, 0.0);  // no undershoot: unchanged
+  CHECK(d.data == m.data);
+  Mask e = square_mask(20, 20, 5, 5, 15, 15);
+  vcar::dilate_by_undershoot(e, 3.0);  // a square grows by 3 px on each side, corners rounded
+  CHECK(e(2, 10) == 255);
+  CHECK(e(1, 10) == 0);
+  CHECK(e(3, 3) == 255);  // (2, 2) from the corner: sqrt 8 <= 3
+  CHECK(e(2, 2) == 0);    // sqrt 18 > 3
+}

@@ -100,6 +100,9 @@ struct VcarParams {
   // tau_strict; tau_strict <= tau_fine (0) = off.
   float tau_strict = 0.f;
   float split_fraction = 0.1f;
+  // Eq. R8: when the fine vote is split (R7 kept tau_fine), ABR reads each training view's mask
+  // widened by its measured undershoot e_j (R6a). Needs undershoot_band > 0 and tau_strict.
+  bool abr_undershoot = false;
   // Eq. 9-13 read Sigma2D with the renderer's eps2d low-pass (conventions §3, true) or the
   // Gaussian's own footprint (false: overflow within ~1.6 px no longer forces f_min).
   bool abr_lowpass = true;
@@ -134,8 +137,9 @@ struct VcarParams {
   // vcar's default (beyond the paper, docs/robust.md): tau_coarse 0.5, tau_fine 0.5, the
   // evidence levels (R2) with the occlusion test in both rounds (R3), unseen fine candidates kept
   // (R4), views weighted by foreshortening (R5), the fine round's band as wide as the masks'
-  // measured undershoot (R6), the strict threshold 0.85 when the fine vote is decisive (R7) and
-  // ABR on the Gaussians' own footprints. The edge band (R1) is off: R6-R7 do its work
+  // measured undershoot (R6), the strict threshold 0.85 when the fine vote is decisive (R7),
+  // ABR on masks widened by their undershoot when it is split (R8) and on the Gaussians' own
+  // footprints. The edge band (R1) is off: R6-R7 do its work
   // (docs/results.md, ablation). What vcar::segment uses when given no parameters.
   static VcarParams robust() {
     VcarParams p;
@@ -147,6 +151,7 @@ struct VcarParams {
     p.undershoot_band = 1.5f;
     p.tau_strict = 0.85f;
     p.split_fraction = 0.1f;
+    p.abr_undershoot = true;
     p.abr_lowpass = false;
     return p;
   }
@@ -196,6 +201,7 @@ struct VcarParams {
     f("keep_unseen", p.keep_unseen); f("keep_undecided", p.keep_undecided); f("kappa", p.kappa);
     f("foreshortening", p.foreshortening); f("undershoot_band", p.undershoot_band);
     f("tau_strict", p.tau_strict); f("split_fraction", p.split_fraction); f("abr_lowpass", p.abr_lowpass);
+    f("abr_undershoot", p.abr_undershoot);
   }
 
   // Throws vcar::Error naming the first parameter outside its range.

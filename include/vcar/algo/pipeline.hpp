@@ -24,6 +24,7 @@
 #include "vcar/algo/params.hpp"
 #include "vcar/algo/robust_sphere.hpp"
 #include "vcar/algo/spiral_sampler.hpp"
+#include "vcar/algo/undershoot.hpp"
 #include "vcar/algo/view_completeness.hpp"
 #include "vcar/algo/visibility_voting.hpp"
 #include "vcar/concepts/renderer.hpp"
@@ -62,6 +63,7 @@ struct Diagnostics {
   std::vector<Camera> sampled_cameras;  // V_sampled
   ObjectSphere sphere{};
   std::size_t abr_flagged = 0, abr_compressed = 0;
+  std::size_t abr_masks_widened = 0; // training masks ABR read widened by their undershoot (Eq. R8)
   std::size_t masks_missing = 0;    // frames the segmenter answered with "no mask"
   std::size_t mask_store_bytes = 0; // run-length bytes held for ABR
   std::string note;                 // why the pipeline stopped early, if it did
@@ -195,6 +197,8 @@ public:
   // The view's render is needed: depth and alpha for Eq. R3, alpha for Eq. R6.
   bool wants_depth() const { return occlusion_ || undershoot_; }
   bool occlusion() const { return occlusion_; }
+  // Eq. R6a of the latest view (0 when R6 is off or the view had no mask or render).
+  double last_undershoot_px() const { return robust_ && undershoot_ ? robust_->last_undershoot_px() : 0.0; }
 
   // One view; `render` (depth + alpha) when wants_depth().
   void add_view(const Camera& cam, const Mask* m, const RenderOutput* render, float tolerance) {
@@ -339,6 +343,8 @@ bool refine(const GaussianScene& scene, const std::vector<Camera>& train_cameras
   auto keep_training_mask = [&](std::size_t k, const Mask* m) {  // k: frame of the round
     if (k < M) train_masks[order[k]] = m && params.enable_abr ? std::optional<RleMask>(RleMask::encode(*m)) : std::nullopt;
   };
+  std::vector<double> undershoot(M, 0.0);  // Eq. R6a of each training view's fine-round mask (px)
+  bool split = false;                       // Eq. R7 kept the majority threshold
   diag.n_coarse = diag.n_fine = diag.n_final = selected.size();
   if (selected.empty()) {
     diag.note = "the coarse stage selected no Gaussian (no training view shows the target, or every mask is empty)";
@@ -383,12 +389,16 @@ bool refine(const GaussianScene& scene, const std::vector<Camera>& train_cameras
         progress, t_start, [&](std::size_t k, const Mask* m, const RenderOutput* render) {
           m = usable(m, params);
           vote(fine, fine_frames[k], m, render, scene, &coarse_set, renderer, params);
-          if (fine_train[k] < M) keep_training_mask(fine_train[k], m);
+          if (fine_train[k] < M) {
+            keep_training_mask(fine_train[k], m);
+            undershoot[order[fine_train[k]]] = m ? fine.last_undershoot_px() : 0.0;
+          }
         }, diag.masks_missing, fine.wants_depth());
     timing("fine_render", t2.render);
     timing("fine_segment", t2.total - t2.render - t2.voting);
     timing("fine_voting", t2.voting);
     diag.tau_fine_applied = fine.selected(params.tau_fine, params.tau_strict, params.split_fraction, selected, scores);
+    split = diag.tau_fine_applied < params.tau_strict;  // R7 found the vote split
     diag.n_fine = diag.n_final = selected.size();
     if (selected.empty()) {
       diag.note = "the fine vote kept no Gaussian (tau_fine too high for these masks?)";
@@ -398,6 +408,14 @@ bool refine(const GaussianScene& scene, const std::vector<Camera>& train_cameras
 
   // ---- Stage 3: ABR on the training views with masks from the latest round (Eq. 9-14, B).
   if (params.enable_abr) stage("abr");
+  if (params.abr_undershoot && params.enable_abr && split)
+    for (std::size_t j = 0; j < M; ++j)
+      if (train_masks[j] && undershoot[j] > 0.0) {
+        Mask m = train_masks[j]->decode();
+        dilate_by_undershoot(m, undershoot[j]);                                              // Eq. R8
+        train_masks[j] = RleMask::encode(m);
+        ++diag.abr_masks_widened;
+      }
   result.log_scale = refine_boundaries(scene, selected, train_cameras, train_masks, params, diag);
   result.indices = std::move(selected);
   result.scores = std::move(scores);

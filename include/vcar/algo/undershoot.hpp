@@ -14,6 +14,11 @@
 // px (Euclidean) of its foreground are no evidence (unsure, Eq. R1b): a Gaussian of G_coarse
 // that the undershooting mask leaves out is not counted as background there. With gamma e_j <= w_j
 // (clean masks: e_j ~ 0-2 px from the splats' own extent) nothing changes. O(W H) per frame.
+//
+// When the fine vote is split (Eq. R7 kept tau_fine: the masks disagree systematically, as
+// undershooting masks do), ABR (Eq. 9-14) reads each training view's mask widened by its e_j:
+//   M'_j = M_j  union  {p : dist(p, M_j) <= e_j}                                    (Eq. R8)
+// so a rim Gaussian whose ellipse reaches past an eroded mask is not shrunk for the erosion.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -47,13 +52,30 @@ inline double undershoot_px(const Mask& m, const ImageF& alpha) {
   return *mid;
 }
 
-// Eq. R6b: marks unsure (0) in `sure` (W x H, 255 = sure) every background pixel of m whose
-// distance to the nearest foreground pixel is at most reach px.
-inline void widen_outer_band(const Mask& m, double reach, std::vector<std::uint8_t>& sure) {
+namespace detail {  // vcar::detail
+// Calls f(q) for every background pixel q of m within reach px (Euclidean) of its foreground.
+template <class F>
+void for_each_within_reach(const Mask& m, double reach, F&& f) {
   if (!(reach > 0.0)) return;
   const std::vector<double> d2 = squared_distance_to(m.data, m.width, m.height);
   for (std::size_t q = 0; q < m.data.size(); ++q)
-    if (!m.data[q] && d2[q] <= reach * reach) sure[q] = 0;
+    if (!m.data[q] && d2[q] <= reach * reach) f(q);
+}
+}  // namespace detail
+
+// Eq. R6b: marks unsure (0) in `sure` (W x H, 255 = sure) every background pixel of m whose
+// distance to the nearest foreground pixel is at most reach px.
+inline void widen_outer_band(const Mask& m, double reach, std::vector<std::uint8_t>& sure) {
+  detail::for_each_within_reach(m, reach, [&](std::size_t q) { sure[q] = 0; });
+}
+
+// Eq. R8: the mask as wide as its measured undershoot e (px): every background pixel within e
+// (Euclidean, pixel centres) of the foreground becomes foreground (255). ABR reads it when the
+// fine vote is split (Eq. R7), i.e. when the masks undershoot.
+inline void dilate_by_undershoot(Mask& m, double e) {
+  std::vector<std::size_t> join;
+  detail::for_each_within_reach(m, e, [&](std::size_t q) { join.push_back(q); });
+  for (std::size_t q : join) m.data[q] = 255;
 }
 
 }  // namespace vcar
