@@ -461,6 +461,16 @@ std::string summary_text(const Diagnostics& d, const VcarParams& p, std::size_t 
   if (!p.enable_abr) std::snprintf(buf, sizeof buf, "ABR       off (enable_abr=false)\n");
   else std::snprintf(buf, sizeof buf, "ABR       %zu Gaussians flagged, %zu compressed\n", d.abr_flagged, d.abr_compressed);
   s += buf;
+  if (d.tau_fine_applied > 0.f && p.tau_strict > p.tau_fine) {  // Eq. R7 (and R8) ran
+    std::snprintf(buf, sizeof buf, "fine vote %s: tau %.2f", d.tau_fine_applied < p.tau_strict ? "split" : "decisive",
+                  static_cast<double>(d.tau_fine_applied));
+    s += buf;
+    if (d.abr_masks_widened > 0) {
+      std::snprintf(buf, sizeof buf, ", %zu training masks widened by their undershoot for ABR", d.abr_masks_widened);
+      s += buf;
+    }
+    s += "\n";
+  }
   if (masks) {
     std::snprintf(buf, sizeof buf, "masks     %zu of %zu training views missing", masks->training_missing, masks->training);
     s += buf;
