@@ -73,9 +73,8 @@ inline void widen_outer_band(const Mask& m, double reach, std::vector<std::uint8
 // (Euclidean, pixel centres) of the foreground becomes foreground (255). ABR reads it when the
 // fine vote is split (Eq. R7), i.e. when the masks undershoot.
 inline void dilate_by_undershoot(Mask& m, double e) {
-  std::vector<std::size_t> join;
-  detail::for_each_within_reach(m, e, [&](std::size_t q) { join.push_back(q); });
-  for (std::size_t q : join) m.data[q] = 255;
+  // In place: each pixel's test reads only its own value and the distances computed first.
+  detail::for_each_within_reach(m, e, [&](std::size_t q) { m.data[q] = 255; });
 }
 
 }  // namespace vcar
