@@ -465,6 +465,11 @@ std::string summary_text(const Diagnostics& d, const VcarParams& p, std::size_t 
     std::snprintf(buf, sizeof buf, "fine vote %s: tau %.2f", d.tau_fine_applied < p.tau_strict ? "split" : "decisive",
                   static_cast<double>(d.tau_fine_applied));
     s += buf;
+    if (p.tau_coarse_split > 0.f && d.tau_coarse_applied == p.tau_coarse_split) {  // Eq. R9 ran
+      std::snprintf(buf, sizeof buf, "; stages 2-3 again from the coarse vote at tau %.2f",
+                    static_cast<double>(d.tau_coarse_applied));
+      s += buf;
+    }
     if (d.abr_masks_widened > 0) {
       std::snprintf(buf, sizeof buf, ", %zu training masks widened by their undershoot for ABR", d.abr_masks_widened);
       s += buf;
@@ -536,6 +541,7 @@ nlohmann::json write_segmentation(const std::filesystem::path& out, const Gaussi
       {"gap_direction", {d.gap_direction.x(), d.gap_direction.y(), d.gap_direction.z()}},
       {"sss_triggered", d.sss_triggered},
       {"tau_fine_applied", d.tau_fine_applied},
+      {"tau_coarse_applied", d.tau_coarse_applied},
       {"sphere", {{"center", {d.sphere.c.x(), d.sphere.c.y(), d.sphere.c.z()}}, {"radius", d.sphere.r},
                   {"inliers", d.sphere.inliers}}},
       {"sampled_views", d.sampled_cameras.size()},

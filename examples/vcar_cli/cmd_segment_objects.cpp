@@ -236,7 +236,8 @@ int run_segment_objects(const SegmentOptions& o, const GlobalOptions& g) {
     rep_objects.push_back({{"name", objects[k].name}, {"reference_view", cams[objects[k].prompt.reference_view].name},
                            {"counts", {{"coarse", d.n_coarse}, {"fine", d.n_fine}, {"final", d.n_final}, {"lost_to_others", result.lost[k]}}},
                            {"valid_cameras", d.valid_cameras}, {"max_gap_deg", d.max_gap_deg}, {"sss_triggered", d.sss_triggered},
-                           {"tau_fine_applied", d.tau_fine_applied}, {"sampled_views", d.sampled_cameras.size()},
+                           {"tau_fine_applied", d.tau_fine_applied}, {"tau_coarse_applied", d.tau_coarse_applied},
+                           {"sampled_views", d.sampled_cameras.size()},
                            {"abr", {{"flagged", d.abr_flagged}, {"compressed", d.abr_compressed}, {"masks_widened", d.abr_masks_widened}}},
                            {"masks_missing", d.masks_missing}, {"note", d.note}, {"timings_s", timings},
                            {"output", "objects/" + objects[k].name + ".ply"}});

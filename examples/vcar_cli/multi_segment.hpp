@@ -213,16 +213,14 @@ MultiSegmentation segment_objects(const GaussianScene& scene, const std::vector<
 
   // ---- each object alone: sphere, view completeness, SSS + fine round, ABR.
   for (std::size_t o = 0; o < K; ++o) {
-    std::vector<Index> selected;
-    std::vector<float> scores;
-    votes[o]->selected(params.tau_coarse, selected, scores);
-    votes[o].reset();  // its counters are not needed any more
     detail_multi::OneObject one{&segmenter, ObjectRequest{o, objects[o].name, objects[o].prompt}};
     const auto to = Clock::now();
-    // Stages 2 and 3 exactly as vcar::segment runs them after its coarse vote.
-    vcar::detail::refine(scene, train_cameras, objects[o].prompt, renderer, one, params, progress, t_start,
-                         train_masks[o], std::move(selected), std::move(scores), out.objects[o],
-                         "fine round (" + objects[o].name + ")");
+    // Stages 2 and 3 exactly as vcar::segment runs them after its coarse vote (Eq. R9 included).
+    vcar::detail::refine_from_coarse(
+        scene, train_cameras, objects[o].prompt, renderer, one, params, progress, t_start, train_masks[o],
+        [&](float tau, std::vector<Index>& selected, std::vector<float>& scores) { votes[o]->selected(tau, selected, scores); },
+        out.objects[o], "fine round (" + objects[o].name + ")");
+    votes[o].reset();  // its counters are not needed any more
     out.objects[o].diagnostics.timings_s.emplace_back("total", seconds_since(to));
   }
   out.conflicts = resolve_conflicts(out.objects, scene.size(), out.lost);

@@ -64,3 +64,16 @@ TEST_CASE("boundary distance of a centre outside the foreground is zero") {
   const vcar::Mask mask = left_of(50, 50, 10);
   CHECK(vcar::boundary_distance(mask, {20.5f, 5.5f}, {-1.f, 0.f}, 15.f, 129) == 0.f);
 }
+
+TEST_CASE("a march cut short finds the same exit when the exit is within reach, none otherwise") {
+  const vcar::Mask mask = left_of(200, 100, 110);
+  const Eigen::Vector2f m(100.3f, 50.3f), u(1.f, 0.f);
+  const float step = 15.f / 128.f;
+  // The exit is sample 83 (first test case).
+  CHECK(vcar::first_exit_sample(mask, m, u, step, 128) == 83);
+  CHECK(vcar::first_exit_sample(mask, m, u, step, 83) == 83);
+  CHECK(vcar::first_exit_sample(mask, m, u, step, 82) == 83);  // none up to 82: last + 1
+  CHECK(vcar::first_exit_sample(mask, m, u, step, 40) == 41);
+  CHECK(vcar::exit_distance(83, step) == Approx(82.5 * 15.0 / 128.0).epsilon(1e-6));
+  CHECK(vcar::exit_distance(0, step) == 0.f);
+}

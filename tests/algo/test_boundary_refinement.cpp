@@ -299,6 +299,35 @@ TEST_CASE("compression_factor: degenerate w_{d*} and the reference-code rules") 
   CHECK(vcar::compression_factor(3.f, lambda, w, 0, p) == Approx(0.1f));  // negative numerator
 }
 
+TEST_CASE("Eq. 13 solved for l_u: the last march sample whose exit can lower a minimum") {
+  vcar::AbrParams p;  // sigma_c 3, f_min 0.1
+  // By hand: lambda 4, w = (1, 0.5, 0.2), d* = 0, minimum 0.5: f < 0.5 <=> (l/3)^2 < 4 - 1 + 0.25,
+  // l* = 3 sqrt(3.25) = 5.408; step 0.1: exit distance (k - 1/2) 0.1 < l* for k <= 54; + 2 margin.
+  CHECK(vcar::last_sample_that_can_beat(0.5f, 4.f, {1.f, 0.5f, 0.2f}, 0, 0.1f, 129, p) == 56);
+  CHECK(vcar::last_sample_that_can_beat(0.5f, 4.f, {1.f, 0.5f, 0.2f}, 0, 0.01f, 129, p) == 128);  // beyond L
+  CHECK(vcar::last_sample_that_can_beat(0.05f, 0.2f, {1.f, 0.f, 0.f}, 0, 0.1f, 129, p) == -1);    // l2 < 0
+  // Brute force, both rule sets: every exit sample whose clamped factor is below the minimum
+  // lies within the returned reach.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> U(0.f, 1.f);
+  int checked = 0, below = 0;
+  for (int trial = 0; trial < 4000; ++trial) {
+    p.reference_code_rules = trial % 2 == 1;
+    const std::array<float, 3> w{4.f * U(rng), 4.f * U(rng), 4.f * U(rng)};
+    const int d = static_cast<int>(std::max_element(w.begin(), w.end()) - w.begin());
+    const float lambda = w[0] + w[1] + w[2] + 0.3f * U(rng);
+    const float L = 3.f * std::sqrt(lambda), step = L / 128.f;
+    const float beat = p.f_min + 1.2f * U(rng);
+    const int last = vcar::last_sample_that_can_beat(beat, lambda, w, d, step, 129, p);
+    for (int k = 0; k <= 128; ++k) {
+      const float f = std::max(p.f_min, vcar::compression_factor(vcar::exit_distance(k, step), lambda, w, d, p));
+      if (f < beat) { ++below; checked += k <= last; }
+    }
+  }
+  CHECK(below > 10000);
+  CHECK(checked == below);
+}
+
 TEST_CASE("reference-code rules on the straddling Gaussian") {
   const auto g = one_gaussian({0.5f, 0.1f, 1.f});
   const Hand h = hand(0.5, 110);
@@ -403,7 +432,7 @@ TEST_CASE("views decided per chunk or per Gaussian from mask tiles equal observe
   vcar::BoundaryRefinement abr(g, cand);
   for (int v = 0; v < 5; ++v) abr.add_view(cams[v], masks[v]);
   const vcar::AbrParams p;
-  int mismatches = 0, eligible = 0, overflowing = 0;
+  int mismatches = 0, eligible = 0, overflowing = 0, below_f_min = 0;
   for (int i = 0; i < n; ++i) {
     int n_vis = 0, n_ovf = 0;
     std::array<float, 3> f{INFINITY, INFINITY, INFINITY};
@@ -417,10 +446,16 @@ TEST_CASE("views decided per chunk or per Gaussian from mask tiles equal observe
     eligible += n_vis;
     overflowing += n_ovf;
     mismatches += (abr.n_vis(i) != n_vis) + (abr.n_ovf(i) != n_ovf);
-    for (int d = 0; d < 3; ++d) mismatches += !(abr.min_factor(i, d) == f[d]);
+    // The refinement keeps the minimum of the factors clamped below at f_min (and traces only
+    // endpoints that can lower it): max(f_min, min over views) of the full observations.
+    for (int d = 0; d < 3; ++d) {
+      mismatches += !(abr.min_factor(i, d) == std::max(p.f_min, f[d]));
+      below_f_min += f[d] < p.f_min;
+    }
   }
   CHECK(eligible > 10000);   // the test exercises both outcomes
   CHECK(overflowing > 500);
+  CHECK(below_f_min > 0);    // ... and factors that the clamp changes
   CHECK(mismatches == 0);
 }
 

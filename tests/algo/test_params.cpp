@@ -80,6 +80,8 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
   CHECK(r.tau_strict > r.tau_fine);
   CHECK_FALSE(r.abr_lowpass);
   CHECK(r.abr_undershoot);  // R8
+  CHECK(r.tau_coarse_split > 0.f);  // R9
+  CHECK(r.tau_coarse_split < r.tau_coarse);
   CHECK(r.kappa == 2.f);
   CHECK(r.robust_vote());
   CHECK_NOTHROW(r.validate());
@@ -91,6 +93,7 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
     CHECK(p.tau_strict <= p.tau_fine);  // Eq. R7 off
     CHECK(p.abr_lowpass);
     CHECK_FALSE(p.abr_undershoot);
+    CHECK(p.tau_coarse_split == 0.f);  // Eq. R9 off
   }
   CHECK(VcarParams::reference_code().force_fine_round);
   CHECK_FALSE(VcarParams::nvos().force_fine_round);

@@ -269,21 +269,22 @@ TEST_CASE("Eq. R8: ABR reads the training masks widened by their undershoot only
     }
     return out;
   });
-  // The coarse round gets blob A's disc; the fine round the disc eroded by `erode` px.
-  int erode = 0;
+  // The coarse round gets blob A's disc eroded by `erode_coarse` px; the fine round the disc
+  // eroded by `erode` px.
+  int erode = 0, erode_coarse = 0;
+  auto eroded_by = [](const vcar::Mask& m, int px) {
+    vcar::Mask e = m;
+    for (int y = 0; y < m.height; ++y)
+      for (int x = 0; x < m.width; ++x)
+        for (int d = 1; d <= px && e(x, y); ++d)
+          if (x - d < 0 || x + d >= m.width || y - d < 0 || y + d >= m.height || !m(x - d, y) || !m(x + d, y) ||
+              !m(x, y - d) || !m(x, y + d))
+            e(x, y) = 0;
+    return e;
+  };
   auto seg = vcar::make_segmenter([&](const vcar::FrameSequence& f, const vcar::Prompt&) {
     std::vector<std::optional<vcar::Mask>> masks;
-    for (const auto& c : f.cameras) {
-      const vcar::Mask m = blob_a_mask(c);
-      vcar::Mask e = m;
-      for (int y = 0; y < m.height; ++y)
-        for (int x = 0; x < m.width; ++x)
-          for (int d = 1; d <= erode && e(x, y); ++d)
-            if (x - d < 0 || x + d >= m.width || y - d < 0 || y + d >= m.height || !m(x - d, y) || !m(x + d, y) ||
-                !m(x, y - d) || !m(x, y + d))
-              e(x, y) = 0;
-      masks.emplace_back(f.subset ? e : m);
-    }
+    for (const auto& c : f.cameras) masks.emplace_back(eroded_by(blob_a_mask(c), f.subset ? erode : erode_coarse));
     return masks;
   });
   vcar::Prompt prompt;
@@ -308,6 +309,46 @@ TEST_CASE("Eq. R8: ABR reads the training masks widened by their undershoot only
   p = vcar::VcarParams::nvos();
   p.force_fine_round = true;
   CHECK(run(5).abr_masks_widened == 0);
+
+  // Eq. R9: after a split fine vote, stages 2-3 run again from the coarse selection at
+  // tau_coarse_split; that pass equals a run whose coarse threshold is tau_coarse_split (the
+  // coarse vote does not depend on the threshold), bit for bit. The coarse masks undershoot too,
+  // so blob A's rim has coarse ratios between the two thresholds.
+  erode_coarse = 2;
+  p = vcar::VcarParams::robust();
+  p.force_fine_round = true;
+  auto full = [&](int px, const vcar::VcarParams& q) {
+    erode = px;
+    return vcar::segment(w.scene, cams, prompt, renderer, seg, q);
+  };
+  const vcar::SegmentationResult retaken = full(5, p);
+  vcar::VcarParams direct = p;
+  direct.tau_coarse = p.tau_coarse_split;
+  direct.tau_coarse_split = 0.f;
+  const vcar::SegmentationResult low = full(5, direct);
+  vcar::VcarParams off = p;
+  off.tau_coarse_split = 0.f;
+  const vcar::SegmentationResult first = full(5, off);
+  REQUIRE(first.diagnostics.tau_fine_applied == p.tau_fine);       // the first pass splits
+  REQUIRE(low.diagnostics.n_coarse > first.diagnostics.n_coarse);   // and the lower threshold adds Gaussians
+  CHECK(retaken.diagnostics.tau_coarse_applied == p.tau_coarse_split);
+  CHECK(first.diagnostics.tau_coarse_applied == p.tau_coarse);
+  CHECK(retaken.diagnostics.n_coarse == low.diagnostics.n_coarse);
+  CHECK(retaken.indices == low.indices);
+  CHECK(retaken.log_scale == low.log_scale);
+  // Timings of both passes add up under one name each.
+  int fine_render = 0;
+  for (const auto& t : retaken.diagnostics.timings_s) fine_render += t.first == "fine_render";
+  CHECK(fine_render == 1);
+  // Exact masks: a decisive vote, one pass, as with R9 off.
+  const vcar::SegmentationResult exact_on = full(0, p), exact_off = full(0, off);
+  CHECK(exact_on.diagnostics.tau_coarse_applied == p.tau_coarse);
+  CHECK(exact_on.indices == exact_off.indices);
+  CHECK(exact_on.log_scale == exact_off.log_scale);
+  // The paper's presets never take the coarse selection again.
+  auto nv = vcar::VcarParams::nvos();
+  nv.force_fine_round = true;
+  CHECK(full(5, nv).diagnostics.tau_coarse_applied == nv.tau_coarse);
 }
 
 TEST_CASE("pipeline: bad input and edge cases") {

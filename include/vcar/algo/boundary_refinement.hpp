@@ -133,12 +133,32 @@ struct AbrObservation {
                          std::numeric_limits<float>::infinity()};
 };
 
+// Eq. 13 solved for l_u: the factor of an endpoint (rules as compression_factor), clamped below
+// at f_min, is below `beat` (> f_min) only where l_u < l*. The factor grows with l_u, and so
+// does the march's l_u with its exit sample: returns the last sample a march must reach to find
+// every exit whose factor can be below `beat` (with a margin of two samples for rounding).
+inline int last_sample_that_can_beat(float beat, float lambda, const std::array<float, 3>& w, int d_star,
+                                     float step, int samples, const AbrParams& p) {
+  float w_star = w[d_star];
+  if (p.reference_code_rules) w_star = lambda * w_star / (w[0] + w[1] + w[2]);
+  // f < beat  <=>  (l / sigma_c)^2 - lambda + w* < beat^2 w*  (Eq. 13, numerator > 0 or not)
+  const float l2 = lambda - w_star + beat * beat * w_star;
+  if (!(l2 > 0.f)) return -1;  // even l_u = 0 cannot beat it
+  const float k = p.sigma_c * std::sqrt(l2) / step + 0.5f;  // l_u(k) = (k - 1/2) step < l*
+  return k < static_cast<float>(samples) ? std::min(samples - 1, static_cast<int>(k) + 2) : samples - 1;
+}
+
 // One eligible-looking Gaussian in one view: centre m (on foreground), perspective Jacobian J at
 // its camera-space mean, rotation R with columns r_d, scales s. The covariance (Eq. 10), the
 // 3-sigma endpoints (Eq. 9) and, for each endpoint outside the mask, Eq. 11-13 (B.3).
+// `beat` (optional): the candidate's running minimum per axis, clamped below at f_min (see
+// BoundaryRefinement). An endpoint whose factor, clamped, cannot be below beat[d*] is not
+// traced (its f stays +inf): the clamped minimum over views is the same, the march shorter or
+// none. Without it every overflowing endpoint is traced in full.
 inline AbrObservation observe_projected(const Camera& cam, const Mask& mask, const Eigen::Vector2f& m,
                                         const Eigen::Matrix<float, 2, 3>& J, const Eigen::Matrix3f& R,
-                                        const Eigen::Vector3f& s, const AbrParams& p) {
+                                        const Eigen::Vector3f& s, const AbrParams& p,
+                                        const std::array<float, 3>* beat = nullptr) {
   AbrObservation obs;
   std::array<Eigen::Vector2f, 3> q;
   const Eigen::Matrix2f S = project_covariance(cam, J, R, s, p.projection.eps2d, q);
@@ -156,7 +176,19 @@ inline AbrObservation observe_projected(const Camera& cam, const Mask& mask, con
     obs.overflow = true;
     const std::array<float, 3> w = axis_contributions(q, s, u);  // Eq. 11
     const int d_star = w[1] > w[0] ? (w[2] > w[1] ? 2 : 1) : (w[2] > w[0] ? 2 : 0);  // d* = argmax w_d (Eq. 11)
-    const float l_u = boundary_distance(mask, m, u, L, p.boundary_samples);  // B.3
+    float l_u = L;
+    const float step = L / static_cast<float>(p.boundary_samples - 1);
+    if (beat) {  // only an exit whose factor can lower the clamped minimum matters
+      const float c = (*beat)[d_star];
+      if (!(c > p.f_min)) continue;
+      const int last = last_sample_that_can_beat(c, lambda, w, d_star, step, p.boundary_samples, p);
+      if (last < 0) continue;
+      const int k = first_exit_sample(mask, m, u, step, last);  // B.3
+      if (k > last && last < p.boundary_samples - 1) continue;  // no exit within reach
+      if (k <= last) l_u = exit_distance(k, step);
+    } else {
+      l_u = boundary_distance(mask, m, u, L, p.boundary_samples);  // B.3
+    }
     const float f = compression_factor(l_u, lambda, w, d_star, p);  // Eq. 13
     obs.f[d_star] = std::min(obs.f[d_star], f);
   }
@@ -316,7 +348,7 @@ class BoundaryRefinement {
         if (obs.overflow) --n_ovf_[k];
         for (int d = 0; d < 3; ++d)
           if (arg_[d][k] == view) mode_[k] = stale;  // this view set a minimum
-      });
+      }, nullptr, false);
     }
     if (new_mask) {
       check_view(cam, *new_mask, view);
@@ -389,7 +421,8 @@ class BoundaryRefinement {
   const std::vector<Index>& candidates() const noexcept { return candidates_; }
   const AbrParams& params() const noexcept { return params_; }
   std::size_t views() const noexcept { return views_; }
-  // Diagnostics of candidate k: eligible views, overflowing views, running minimum factor of axis d.
+  // Diagnostics of candidate k: eligible views, overflowing views, running minimum over views of
+  // max(f_min, f) for axis d (+inf: no overflowing view named d*; finish() clamps it to 1).
   std::uint16_t n_vis(std::size_t k) const { return n_vis_[slot_[k]]; }
   std::uint16_t n_ovf(std::size_t k) const { return n_ovf_[slot_[k]]; }
   float min_factor(std::size_t k, int d) const { return f_[d][slot_[k]]; }
@@ -438,10 +471,15 @@ class BoundaryRefinement {
     ++n_ovf_[k];
     min_into(k, obs, view);
   }
-  // Multi-view minimum per axis (B.3), remembering the view that set it.
+  // Multi-view minimum per axis (B.3) of the factors clamped below at f_min, remembering the view
+  // that set it. finish() clamps the minimum to [f_min, 1]: max(f_min, min_v f_v) = min_v
+  // max(f_min, f_v), so clamping each view's factor first changes nothing there, and it lets
+  // observe_projected skip every endpoint that cannot lower the minimum (its `beat`).
   void min_into(std::size_t k, const AbrObservation& obs, std::uint16_t view) {
-    for (int d = 0; d < 3; ++d)
-      if (obs.f[d] < f_[d][k]) f_[d][k] = obs.f[d], arg_[d][k] = view;
+    for (int d = 0; d < 3; ++d) {
+      const float f = std::max(params_.f_min, obs.f[d]);
+      if (f < f_[d][k]) f_[d][k] = f, arg_[d][k] = view;
+    }
   }
   void count_modes() {
     wanted_ = 0;
@@ -452,10 +490,13 @@ class BoundaryRefinement {
   // observe_gaussian gives it. With `tiles` (tiles_ built from this mask) whole chunks and
   // single Gaussians that the mask's tiles decide skip the covariance (same counts and minima).
   // `boxes` (optional) lists the chunk boxes that hold a wanted slot; the others are skipped.
+  // `factors` false: apply needs the counts only (no endpoint is traced, obs.f stays +inf).
   template <class Want, class Apply>
   void observe_view(const Camera& cam, const Mask& mask, bool tiles, Want want, Apply apply,
-                    const std::vector<std::uint32_t>* boxes = nullptr) {
+                    const std::vector<std::uint32_t>* boxes = nullptr, bool factors = true) {
     const AbrParams p = params_;
+    constexpr float lowest = -std::numeric_limits<float>::infinity();
+    const std::array<float, 3> no_factors{lowest, lowest, lowest};
     AbrObservation inside;  // eligible, no endpoint outside, no factor
     inside.eligible = true;
     const detail::MeanProjection P = detail::MeanProjection::from(cam);
@@ -489,7 +530,8 @@ class BoundaryRefinement {
           Eigen::Matrix3f R;
           for (int q = 0; q < 9; ++q) R(q % 3, q / 3) = rot_[q][k];
           const Eigen::Vector3f s(s_[0][k], s_[1][k], s_[2][k]);
-          const AbrObservation obs = observe_projected(cam, mask, m, J, R, s, p);
+          const std::array<float, 3> beat = factors ? std::array<float, 3>{f_[0][k], f_[1][k], f_[2][k]} : no_factors;
+          const AbrObservation obs = observe_projected(cam, mask, m, J, R, s, p, &beat);
           if (obs.eligible) apply(k, obs);
         }
       }

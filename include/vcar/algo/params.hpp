@@ -100,6 +100,10 @@ struct VcarParams {
   // tau_strict; tau_strict <= tau_fine (0) = off.
   float tau_strict = 0.f;
   float split_fraction = 0.1f;
+  // Eq. R9: when the fine vote is split (R7 kept tau_fine), stages 2-3 run once more from the
+  // coarse selection at tau_coarse_split (< tau_coarse), and that pass is the result. Needs
+  // tau_strict; 0 = off.
+  float tau_coarse_split = 0.f;
   // Eq. R8: when the fine vote is split (R7 kept tau_fine), ABR reads each training view's mask
   // widened by its measured undershoot e_j (R6a). Needs undershoot_band > 0 and tau_strict.
   bool abr_undershoot = false;
@@ -138,7 +142,8 @@ struct VcarParams {
   // evidence levels (R2) with the occlusion test in both rounds (R3), unseen fine candidates kept
   // (R4), views weighted by foreshortening (R5), the fine round's band as wide as the masks'
   // measured undershoot (R6), the strict threshold 0.85 when the fine vote is decisive (R7),
-  // ABR on masks widened by their undershoot when it is split (R8) and on the Gaussians' own
+  // ABR on masks widened by their undershoot when it is split (R8), stages 2-3 again from the
+  // coarse vote at 0.3 when it is split (R9), and ABR on the Gaussians' own
   // footprints. The edge band (R1) is off: R6-R7 do its work
   // (docs/results.md, ablation). What vcar::segment uses when given no parameters.
   static VcarParams robust() {
@@ -152,6 +157,7 @@ struct VcarParams {
     p.tau_strict = 0.85f;
     p.split_fraction = 0.1f;
     p.abr_undershoot = true;
+    p.tau_coarse_split = 0.3f;
     p.abr_lowpass = false;
     return p;
   }
@@ -201,7 +207,7 @@ struct VcarParams {
     f("keep_unseen", p.keep_unseen); f("keep_undecided", p.keep_undecided); f("kappa", p.kappa);
     f("foreshortening", p.foreshortening); f("undershoot_band", p.undershoot_band);
     f("tau_strict", p.tau_strict); f("split_fraction", p.split_fraction); f("abr_lowpass", p.abr_lowpass);
-    f("abr_undershoot", p.abr_undershoot);
+    f("abr_undershoot", p.abr_undershoot); f("tau_coarse_split", p.tau_coarse_split);
   }
 
   // Throws vcar::Error naming the first parameter outside its range.
@@ -242,6 +248,7 @@ struct VcarParams {
       bad("undershoot_band", "must be in [0, 100] (0 = off), got " + std::to_string(undershoot_band));
     unit("tau_strict", tau_strict);
     unit("split_fraction", split_fraction);
+    unit("tau_coarse_split", tau_coarse_split);
     if (!(edge_band >= 0.f && edge_band <= 1.f)) bad("edge_band", "must be in [0, 1] (0 = off), got " + std::to_string(edge_band));
   }
 

@@ -60,6 +60,8 @@ struct Diagnostics {
   Eigen::Vector3f gap_direction = Eigen::Vector3f::Zero();
   bool sss_triggered = false;
   float tau_fine_applied = 0.f;     // the fine round's threshold (Eq. R7: tau_fine or tau_strict); 0: no fine round
+  float tau_coarse_applied = 0.f;   // the coarse threshold of the selection the result comes from (Eq. R9:
+                                    // tau_coarse, or tau_coarse_split after a split fine vote)
   std::vector<Camera> sampled_cameras;  // V_sampled
   ObjectSphere sphere{};
   std::size_t abr_flagged = 0, abr_compressed = 0;
@@ -423,6 +425,51 @@ bool refine(const GaussianScene& scene, const std::vector<Camera>& train_cameras
   return true;
 }
 
+// Stages 2 and 3 (refine) from the coarse selection at tau_coarse, and, when Eq. R7 finds the
+// fine vote split and tau_coarse_split is on, once more from the coarse selection at
+// tau_coarse_split (Eq. R9; docs/robust.md): masks that undershoot already cost the coarse vote
+// the object's rim. `coarse_selection(tau, indices, scores)` gives the coarse vote's selection at
+// a threshold; `train_masks` holds the coarse round's training masks. Timings of both passes
+// add up under the same names.
+template <Renderer R, Segmenter S, class CoarseSelection>
+bool refine_from_coarse(const GaussianScene& scene, const std::vector<Camera>& train_cameras, const Prompt& prompt,
+                        R& renderer, S& segmenter, const VcarParams& params, const ProgressCallback& progress,
+                        Clock::time_point t_start, std::vector<std::optional<RleMask>>& train_masks,
+                        CoarseSelection&& coarse_selection, SegmentationResult& result,
+                        std::string_view fine_round = "fine round") {
+  std::vector<Index> selected;
+  std::vector<float> scores;
+  coarse_selection(params.tau_coarse, selected, scores);
+  const bool may_retake = params.tau_coarse_split > 0.f && params.tau_coarse_split < params.tau_coarse &&
+                          params.tau_strict > params.tau_fine;
+  std::vector<std::optional<RleMask>> coarse_masks;
+  if (may_retake) coarse_masks = train_masks;  // run-length encoded: O(boundary) per view
+  result.diagnostics.tau_coarse_applied = params.tau_coarse;
+  bool complete = refine(scene, train_cameras, prompt, renderer, segmenter, params, progress, t_start, train_masks,
+                         std::move(selected), std::move(scores), result, fine_round);
+  const Diagnostics& first = result.diagnostics;
+  if (!may_retake || first.tau_fine_applied <= 0.f || !(first.tau_fine_applied < params.tau_strict)) return complete;
+  coarse_selection(params.tau_coarse_split, selected, scores);                                // Eq. R9
+  if (selected.size() <= first.n_coarse) return complete;  // nothing between the two thresholds
+  SegmentationResult second;
+  Diagnostics& d2 = second.diagnostics;
+  d2.n_scene = first.n_scene;
+  d2.masks_missing = first.masks_missing;
+  d2.tau_coarse_applied = params.tau_coarse_split;
+  train_masks = std::move(coarse_masks);
+  complete = refine(scene, train_cameras, prompt, renderer, segmenter, params, progress, t_start, train_masks,
+                    std::move(selected), std::move(scores), second, fine_round);
+  std::vector<std::pair<std::string, double>> timings = first.timings_s;
+  for (const auto& [name, s] : d2.timings_s) {
+    auto at = std::find_if(timings.begin(), timings.end(), [&](const auto& t) { return t.first == name; });
+    if (at == timings.end()) timings.emplace_back(name, s);
+    else at->second += s;
+  }
+  d2.timings_s = std::move(timings);
+  result = std::move(second);
+  return complete;
+}
+
 }  // namespace detail
 
 // Segments the object prompted on train_cameras[prompt.reference_view].
@@ -480,11 +527,10 @@ SegmentationResult segment(const GaussianScene& scene, const std::vector<Camera>
   timing("coarse_render", t1.render);
   timing("coarse_segment", t1.total - t1.render - t1.voting);
   timing("coarse_voting", t1.voting);
-  std::vector<Index> selected;
-  std::vector<float> scores;
-  coarse.selected(params.tau_coarse, selected, scores);
-  const bool complete = detail::refine(scene, train_cameras, prompt, renderer, segmenter, params, progress, t_start,
-                                       train_masks, std::move(selected), std::move(scores), result);
+  const bool complete = detail::refine_from_coarse(
+      scene, train_cameras, prompt, renderer, segmenter, params, progress, t_start, train_masks,
+      [&](float tau, std::vector<Index>& selected, std::vector<float>& scores) { coarse.selected(tau, selected, scores); },
+      result);
   timing("total", seconds_since(t_start));
   if (complete) stage("done");
   return result;
