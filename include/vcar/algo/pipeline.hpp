@@ -460,10 +460,10 @@ bool refine_from_coarse(const GaussianScene& scene, const std::vector<Camera>& t
   complete = refine(scene, train_cameras, prompt, renderer, segmenter, params, progress, t_start, train_masks,
                     std::move(selected), std::move(scores), second, fine_round);
   std::vector<std::pair<std::string, double>> timings = first.timings_s;
-  for (const auto& [name, s] : d2.timings_s) {
-    auto at = std::find_if(timings.begin(), timings.end(), [&](const auto& t) { return t.first == name; });
-    if (at == timings.end()) timings.emplace_back(name, s);
-    else at->second += s;
+  for (const auto& stage : d2.timings_s) {  // (not a structured binding: clang 14 cannot capture one)
+    auto at = std::find_if(timings.begin(), timings.end(), [&](const auto& t) { return t.first == stage.first; });
+    if (at == timings.end()) timings.push_back(stage);
+    else at->second += stage.second;
   }
   d2.timings_s = std::move(timings);
   result = std::move(second);
