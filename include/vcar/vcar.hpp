@@ -23,6 +23,7 @@
 #include "vcar/algo/robust_sphere.hpp"
 #include "vcar/algo/view_completeness.hpp"
 #include "vcar/algo/spiral_sampler.hpp"
+#include "vcar/algo/abr_geometry.hpp"
 #include "vcar/algo/boundary_distance.hpp"
 #include "vcar/algo/boundary_refinement.hpp"
 #include "vcar/algo/pipeline.hpp"

@@ -107,28 +107,6 @@ RingFixture ring_fixture() {
 
 }  // namespace
 
-TEST_CASE("symmetric_eigen2 matches a brute-force eigen solver") {
-  std::mt19937 rng(1);
-  std::uniform_real_distribution<float> U(-5.f, 5.f);
-  for (int t = 0; t < 500; ++t) {
-    Eigen::Matrix2f A;
-    A << U(rng), U(rng), U(rng), U(rng);
-    Eigen::Matrix2f S = A * A.transpose();
-    if (t % 50 == 0) S = Eigen::Matrix2f::Identity() * 2.f;            // isotropic
-    if (t % 50 == 1) { S(0, 1) = S(1, 0) = 0.f; }                      // diagonal
-    const vcar::SymmetricEigen2 E = vcar::symmetric_eigen2(S);
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> ref(S.cast<double>());
-    const double scale = std::max(1.0, ref.eigenvalues()(1));
-    CHECK(E.lambda1 == Approx(ref.eigenvalues()(1)).margin(1e-5 * scale));
-    CHECK(E.lambda2 == Approx(ref.eigenvalues()(0)).margin(1e-5 * scale));
-    CHECK(E.lambda1 >= E.lambda2);
-    CHECK(E.e1.norm() == Approx(1).epsilon(1e-5));
-    CHECK(E.e1.dot(E.e2) == Approx(0).margin(1e-6));
-    CHECK((S * E.e1 - E.lambda1 * E.e1).norm() <= 1e-4 * scale);
-    CHECK((S * E.e2 - E.lambda2 * E.e2).norm() <= 1e-4 * scale);
-  }
-}
-
 TEST_CASE("Eq. 11: lambda == sum_d w_d + eps2d for random Gaussians and cameras") {
   std::mt19937 rng(2);
   std::uniform_real_distribution<float> U(-1.f, 1.f), L(-4.f, -0.5f);

@@ -54,6 +54,20 @@ TEST_CASE("simd: exp within 2 ulp of std::exp over the renderer's range", "[simd
   }
 }
 
+TEST_CASE("simd: sqrt is correctly rounded, as std::sqrt, bit for bit", "[simd]") {
+  alignas(64) float x[L], out[L];
+  int differing = 0;
+  for (float x0 = 1e-6f; x0 < 1e6f; x0 *= 1.37f) {
+    for (std::size_t l = 0; l < L; ++l) x[l] = x0 * (1.f + 0.013f * static_cast<float>(l));
+    simd::sqrt(BF::load_aligned(x)).store_aligned(out);
+    for (std::size_t l = 0; l < L; ++l) differing += out[l] != std::sqrt(x[l]);
+  }
+  x[0] = 0.f;
+  simd::sqrt(BF::load_aligned(x)).store_aligned(out);
+  CHECK(out[0] == 0.f);
+  CHECK(differing == 0);
+}
+
 TEST_CASE("simd: to_int truncates, reduce_add sums, gather reads words[idx]", "[simd]") {
   alignas(64) float f[L];
   alignas(64) std::int32_t idx[L], got[L];

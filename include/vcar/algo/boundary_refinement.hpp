@@ -33,6 +33,7 @@
 
 #include <Eigen/Core>
 
+#include "vcar/algo/abr_geometry.hpp"
 #include "vcar/algo/boundary_distance.hpp"
 #include "vcar/algo/mean_projection.hpp"
 #include "vcar/core/camera.hpp"
@@ -72,30 +73,6 @@ struct AbrResult {
   std::size_t compressed = 0;    // flagged candidates with at least one axis scaled by f < 1
   std::vector<std::uint8_t> axis_compressed;  // bit d set: axis d of candidate k was compressed
 };
-
-// Eigen-decomposition of a symmetric 2x2 matrix, lambda1 >= lambda2, unit e1 _|_ e2 (Eq. 9).
-struct SymmetricEigen2 {
-  float lambda1 = 0, lambda2 = 0;
-  Eigen::Vector2f e1{1, 0}, e2{0, 1};
-};
-
-// Closed form: lambda = mean +- sqrt(diff^2 + b^2); e1 from the row of (S - lambda1 I) that is
-// better conditioned; an isotropic matrix gets the image axes.
-inline SymmetricEigen2 symmetric_eigen2(const Eigen::Matrix2f& S) {
-  const float a = S(0, 0), b = S(0, 1), c = S(1, 1);
-  const float mean = 0.5f * (a + c), diff = 0.5f * (a - c);
-  const float r = std::sqrt(diff * diff + b * b);
-  SymmetricEigen2 E;
-  E.lambda1 = mean + r;
-  E.lambda2 = mean - r;
-  Eigen::Vector2f v = diff >= 0.f ? Eigen::Vector2f(diff + r, b) : Eigen::Vector2f(b, r - diff);
-  const float n2 = v.squaredNorm();
-  if (n2 > 0.f) {
-    E.e1 = v / std::sqrt(n2);
-    E.e2 = {-E.e1.y(), E.e1.x()};
-  }
-  return E;
-}
 
 // Eq. 11: w_d = s_d^2 (u^T q_d)^2, the variance that axis d contributes along unit u.
 inline std::array<float, 3> axis_contributions(const std::array<Eigen::Vector2f, 3>& q,
@@ -148,26 +125,22 @@ inline int last_sample_that_can_beat(float beat, float lambda, const std::array<
   return k < static_cast<float>(samples) ? std::min(samples - 1, static_cast<int>(k) + 2) : samples - 1;
 }
 
-// One eligible-looking Gaussian in one view: centre m (on foreground), perspective Jacobian J at
-// its camera-space mean, rotation R with columns r_d, scales s. The covariance (Eq. 10), the
-// 3-sigma endpoints (Eq. 9) and, for each endpoint outside the mask, Eq. 11-13 (B.3).
+// Lane l of `g` (abr_geometry of one view), a Gaussian with scales s whose centre lies on the
+// mask's foreground (B.1): the 3-sigma endpoints (Eq. 9) and, for each endpoint outside the mask,
+// Eq. 11-13 (B.3). A degenerate covariance is not eligible (as project_gaussian, rule (e)).
 // `beat` (optional): the candidate's running minimum per axis, clamped below at f_min (see
 // BoundaryRefinement). An endpoint whose factor, clamped, cannot be below beat[d*] is not
 // traced (its f stays +inf): the clamped minimum over views is the same, the march shorter or
 // none. Without it every overflowing endpoint is traced in full.
-inline AbrObservation observe_projected(const Camera& cam, const Mask& mask, const Eigen::Vector2f& m,
-                                        const Eigen::Matrix<float, 2, 3>& J, const Eigen::Matrix3f& R,
-                                        const Eigen::Vector3f& s, const AbrParams& p,
-                                        const std::array<float, 3>* beat = nullptr) {
+inline AbrObservation observe_lane(const Mask& mask, const AbrBatch& g, std::size_t l, const Eigen::Vector3f& s,
+                                   const AbrParams& p, const std::array<float, 3>* beat = nullptr) {
   AbrObservation obs;
-  std::array<Eigen::Vector2f, 3> q;
-  const Eigen::Matrix2f S = project_covariance(cam, J, R, s, p.projection.eps2d, q);
-  const float det = S(0, 0) * S(1, 1) - S(0, 1) * S(0, 1);
-  if (!(det > 0.f) || !(1.f >= p.projection.alpha_min)) return obs;  // degenerate: as project_gaussian, rule (e)
+  if (!(g.det[l] > 0.f) || !(1.f >= p.projection.alpha_min)) return obs;  // degenerate: rule (e)
   obs.eligible = true;
-  const SymmetricEigen2 E = symmetric_eigen2(S);
-  const float lambdas[2] = {std::max(E.lambda1, 0.f), std::max(E.lambda2, 0.f)};
-  const Eigen::Vector2f axes[2] = {E.e1, E.e2};
+  const Eigen::Vector2f m = g.m(l), e1(g.e1x[l], g.e1y[l]);
+  const std::array<Eigen::Vector2f, 3> q{g.q(0, l), g.q(1, l), g.q(2, l)};
+  const float lambdas[2] = {std::max(g.lambda1[l], 0.f), std::max(g.lambda2[l], 0.f)};
+  const Eigen::Vector2f axes[2] = {e1, Eigen::Vector2f(-e1.y(), e1.x())};
   for (int k = 0; k < 4; ++k) {  // endpoints m +- a e1, m +- b e2 (Eq. 9)
     const float lambda = lambdas[k >> 1];
     const Eigen::Vector2f u = (k & 1) ? Eigen::Vector2f(-axes[k >> 1]) : axes[k >> 1];
@@ -195,26 +168,25 @@ inline AbrObservation observe_projected(const Camera& cam, const Mask& mask, con
   return obs;
 }
 
-// B.1 and rule (e): the camera-space mean t and projected centre m of mean mu; true when the
-// centre lies between the near and far planes and on the mask's foreground (eligible).
-inline bool eligible_centre(const Camera& cam, const Mask& mask, const Eigen::Vector3f& mu, const AbrParams& p,
-                            Eigen::Vector3f& t, Eigen::Vector2f& m) {
-  t = cam.to_camera(mu);
-  if (!(t.z() >= p.projection.near_plane && t.z() <= p.projection.far_plane)) return false;
-  m = {cam.fx * t.x() / t.z() + cam.cx, cam.fy * t.y() / t.z() + cam.cy};
-  return mask_at(mask, m.x(), m.y());
-}
-
-// One Gaussian (mean mu, rotation R with columns r_d, scales s) in one view with its mask.
-// Assumes mask is camera-sized (checked where views enter, BoundaryRefinement::add_view).
+// One Gaussian (mean mu, rotation R with columns r_d, scales s) in one view with its mask: B.1
+// (the centre between the near and far planes and on the mask's foreground), then observe_lane.
+// The reference that BoundaryRefinement equals; it computes the geometry as the refinement does
+// (abr_geometry, here with the Gaussian in every lane). Assumes a camera-sized mask.
 inline AbrObservation observe_gaussian(const Camera& cam, const Mask& mask, const Eigen::Vector3f& mu,
                                        const Eigen::Matrix3f& R, const Eigen::Vector3f& s,
                                        const AbrParams& p) {
-  // Eligibility first (rule (b), B.1): most Gaussian-views that fail it skip the covariance.
-  Eigen::Vector3f t;
-  Eigen::Vector2f m;
-  if (!eligible_centre(cam, mask, mu, p, t, m)) return {};
-  return observe_projected(cam, mask, m, perspective_jacobian(cam, t, p.projection.frustum_margin), R, s, p);
+  constexpr std::size_t L = simd::width;
+  alignas(64) float col[15][L];  // x, y, z, R column-major, s: each broadcast
+  for (std::size_t l = 0; l < L; ++l) {
+    for (int d = 0; d < 3; ++d) col[d][l] = mu[d], col[12 + d][l] = s[d];
+    for (int e = 0; e < 9; ++e) col[3 + e][l] = R(e % 3, e / 3);
+  }
+  const float* const rot[9] = {col[3], col[4], col[5], col[6], col[7], col[8], col[9], col[10], col[11]};
+  const float* const sc[3] = {col[12], col[13], col[14]};
+  AbrBatch g;
+  abr_geometry(AbrCamera::from(cam, p.projection), col[0], col[1], col[2], rot, sc, g);
+  if (!(g.front[0] > 0.f) || !mask_at(mask, g.mx[0], g.my[0])) return {};  // B.1, rule (e)
+  return observe_lane(mask, g, 0, s, p);
 }
 
 class BoundaryRefinement {
@@ -233,9 +205,11 @@ class BoundaryRefinement {
     const auto means = detail::candidate_means(scene, candidates_);
     const std::vector<std::uint32_t> order = morton_order(means[0].data(), means[1].data(), means[2].data(), n);
     slot_.resize(n);
-    for (auto& c : mu_) c.resize(n);
-    for (auto& c : rot_) c.resize(n);
-    for (auto& c : s_) c.resize(n);
+    // Geometry columns padded to whole chunk boxes: abr_geometry reads simd::width slots at a time.
+    const std::size_t padded = (n + kBox - 1) / kBox * kBox;
+    for (auto& c : mu_) c.assign(padded, 0.f);
+    for (auto& c : rot_) c.assign(padded, 0.f);
+    for (auto& c : s_) c.assign(padded, 0.f);
     for (auto& c : log_s_) c.resize(n);
     for (auto& c : f_) c.assign(n, std::numeric_limits<float>::infinity());
     for (auto& c : arg_) c.assign(n, no_view);
@@ -487,8 +461,9 @@ class BoundaryRefinement {
   }
 
   // One view: apply(k, obs) for every slot k with want(k) whose centre is eligible (B.1), obs as
-  // observe_gaussian gives it. With `tiles` (tiles_ built from this mask) whole chunks and
-  // single Gaussians that the mask's tiles decide skip the covariance (same counts and minima).
+  // observe_gaussian gives it (abr_geometry simd::width slots at a time, the mask lane by lane).
+  // With `tiles` (tiles_ built from this mask) whole chunks that the mask's tiles decide skip
+  // the covariance (same counts and minima).
   // `boxes` (optional) lists the chunk boxes that hold a wanted slot; the others are skipped.
   // `factors` false: apply needs the counts only (no endpoint is traced, obs.f stays +inf).
   template <class Want, class Apply>
@@ -500,6 +475,7 @@ class BoundaryRefinement {
     AbrObservation inside;  // eligible, no endpoint outside, no factor
     inside.eligible = true;
     const detail::MeanProjection P = detail::MeanProjection::from(cam);
+    const AbrCamera C = AbrCamera::from(cam, p.projection);
     const std::int64_t n_boxes = static_cast<std::int64_t>(boxes ? boxes->size() : box_.size());
     parallel_chunks(n_boxes, kChunk / kBox, [&](std::int64_t, std::int64_t b, std::int64_t e) {
       for (std::int64_t i = b; i < e; ++i) {
@@ -516,26 +492,34 @@ class BoundaryRefinement {
             continue;
           case MaskTiles::mixed: break;
         }
-        for (std::size_t k = j0; k < j1; ++k) {
-          if (!want(k)) continue;
-          // observe_gaussian, with the mask tiles' shortcut between eligibility and covariance.
-          Eigen::Vector3f t;
-          Eigen::Vector2f m;
-          if (!eligible_centre(cam, mask, Eigen::Vector3f(mu_[0][k], mu_[1][k], mu_[2][k]), p, t, m)) continue;
-          const Eigen::Matrix<float, 2, 3> J = perspective_jacobian(cam, t, p.projection.frustum_margin);
-          if (tiles && reach_on_foreground(cam, J, m, max_scale_squared(k), p)) {
-            apply(k, inside);  // eligible, no endpoint outside
-            continue;
+        // observe_gaussian, simd::width slots at a time (kBox is a whole number of batches).
+        AbrBatch g;
+        for (std::size_t j = j0; j < j1; j += simd::width) {
+          const std::size_t lanes = std::min(simd::width, j1 - j);
+          bool wanted = false;
+          for (std::size_t l = 0; l < lanes && !wanted; ++l) wanted = want(j + l);
+          if (!wanted) continue;
+          geometry(C, j, g);
+          for (std::size_t l = 0; l < lanes; ++l) {
+            const std::size_t k = j + l;
+            if (!want(k) || !(g.front[l] > 0.f) || !mask_at(mask, g.mx[l], g.my[l])) continue;  // B.1, rule (e)
+            const Eigen::Vector3f s(s_[0][k], s_[1][k], s_[2][k]);
+            const std::array<float, 3> beat = factors ? std::array<float, 3>{f_[0][k], f_[1][k], f_[2][k]} : no_factors;
+            const AbrObservation obs = observe_lane(mask, g, l, s, p, &beat);
+            if (obs.eligible) apply(k, obs);
           }
-          Eigen::Matrix3f R;
-          for (int q = 0; q < 9; ++q) R(q % 3, q / 3) = rot_[q][k];
-          const Eigen::Vector3f s(s_[0][k], s_[1][k], s_[2][k]);
-          const std::array<float, 3> beat = factors ? std::array<float, 3>{f_[0][k], f_[1][k], f_[2][k]} : no_factors;
-          const AbrObservation obs = observe_projected(cam, mask, m, J, R, s, p, &beat);
-          if (obs.eligible) apply(k, obs);
         }
       }
     });
+  }
+
+  // abr_geometry of slots [j, j + simd::width) in the view C.
+  void geometry(const AbrCamera& C, std::size_t j, AbrBatch& g) const {
+    const float* const rot[9] = {rot_[0].data() + j, rot_[1].data() + j, rot_[2].data() + j,
+                                 rot_[3].data() + j, rot_[4].data() + j, rot_[5].data() + j,
+                                 rot_[6].data() + j, rot_[7].data() + j, rot_[8].data() + j};
+    const float* const s[3] = {s_[0].data() + j, s_[1].data() + j, s_[2].data() + j};
+    abr_geometry(C, mu_[0].data() + j, mu_[1].data() + j, mu_[2].data() + j, rot, s, g);
   }
 
   // max_d s_d^2 of slot j: the largest eigenvalue of its 3D covariance R S^2 R^T; +inf when a
@@ -579,26 +563,8 @@ class BoundaryRefinement {
                                                                                             : MaskTiles::mixed;
   }
 
-  // The same decision for one Gaussian whose centre m is on foreground (largest squared scale
-  // s2max, Jacobian J at its mean): true when every pixel within sigma_c sqrt(lambda_1) of the
-  // centre is foreground inside the image, with lambda_1 <= ||J||^2 s2max + eps2d (Eq. 10:
-  // J R_w Sigma R_w^T J^T + eps2d I), so no endpoint overflows.
-  bool reach_on_foreground(const Camera& cam, const Eigen::Matrix<float, 2, 3>& J, const Eigen::Vector2f& m,
-                           float s2max, const AbrParams& p) const {
-    if (!(p.projection.eps2d > 0.f) || !(s2max < 1e30f)) return false;
-    // ||J||^2 = largest eigenvalue of J J^T.
-    const Eigen::Matrix2f JJ = J * J.transpose();
-    const float mean = 0.5f * (JJ(0, 0) + JJ(1, 1)), diff = 0.5f * (JJ(0, 0) - JJ(1, 1));
-    const float jmax = mean + std::sqrt(diff * diff + JJ(0, 1) * JJ(0, 1));
-    const float reach = p.sigma_c * std::sqrt(jmax * s2max + p.projection.eps2d) * 1.001f + 1.f;
-    if (!(reach < 1e6f)) return false;
-    const int r = static_cast<int>(std::ceil(reach));
-    const int px = static_cast<int>(m.x()), py = static_cast<int>(m.y());
-    if (px - r < 0 || py - r < 0 || px + r >= cam.width || py + r >= cam.height) return false;
-    return tiles_.classify(px - r, py - r, px + r, py + r) == MaskTiles::foreground;
-  }
-
-  static constexpr std::size_t kBox = 64;  // slots per chunk box
+  static constexpr std::size_t kBox = 64;  // slots per chunk box (a whole number of SIMD batches)
+  static_assert(kBox % simd::width == 0);
   static constexpr std::int64_t kChunk = 2048;
   std::vector<Index> candidates_;
   std::vector<std::uint32_t> slot_;          // internal slot of candidate position k

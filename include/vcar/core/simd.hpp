@@ -56,6 +56,7 @@ inline batch<T> min(const batch<T>& a, const batch<T>& b) { return xsimd::min(a,
 template <class T>
 inline batch<T> max(const batch<T>& a, const batch<T>& b) { return xsimd::max(a, b); }
 inline batch<float> exp(const batch<float>& a) { return xsimd::exp(a); }
+inline batch<float> sqrt(const batch<float>& a) { return xsimd::sqrt(a); }  // correctly rounded, as std::sqrt
 template <class T>
 inline batch<T> select(const batch_bool<T>& c, const batch<T>& a, const batch<T>& b) { return xsimd::select(c, a, b); }
 template <class T>
@@ -180,6 +181,7 @@ inline batch<T> min(const batch<T>& a, const batch<T>& b) { return batch<T>::zip
 template <class T>
 inline batch<T> max(const batch<T>& a, const batch<T>& b) { return batch<T>::zip(a, b, [](T x, T y) { return x > y ? x : y; }); }
 inline batch<float> exp(const batch<float>& a) { return batch<float>::map(a, [](float x) { return std::exp(x); }); }
+inline batch<float> sqrt(const batch<float>& a) { return batch<float>::map(a, [](float x) { return std::sqrt(x); }); }
 template <class T>
 inline batch<T> select(const batch_bool<T>& c, const batch<T>& a, const batch<T>& b) {
   batch<T> r;
