@@ -49,7 +49,7 @@ struct Columns {
   void geometry(const vcar::AbrCamera& C, vcar::AbrBatch& out) const {
     const float* const rot[9] = {c[3], c[4], c[5], c[6], c[7], c[8], c[9], c[10], c[11]};
     const float* const s[3] = {c[12], c[13], c[14]};
-    vcar::abr_geometry(C, c[0], c[1], c[2], rot, s, out);
+    vcar::abr_geometry(C, c[0], c[1], c[2], rot, s, 3.f, out);
   }
 };
 
@@ -77,7 +77,7 @@ TEST_CASE("symmetric_eigen2 matches a brute-force eigen solver") {
   }
 }
 
-TEST_CASE("abr_geometry: every lane as project_gaussian computes it (Eq. 10, B.7) and Eq. 9's eigenpairs") {
+TEST_CASE("abr_geometry: every lane as project_gaussian computes it (Eq. 10, B.7), Eq. 9's eigenpairs and endpoints") {
   const auto gs = random_gaussians(800, 7);
   const vcar::Intrinsics k{320, 240, 260.f, 250.f, 161.3f, 118.7f};
   const vcar::Camera cam = vcar::Camera::look_at({0.4f, 0.3f, -0.8f}, {0, 0, 0}, {0, 1, 0}, k, "v");
@@ -107,6 +107,17 @@ TEST_CASE("abr_geometry: every lane as project_gaussian computes it (Eq. 10, B.7
       const Eigen::Vector2d e1(b.e1x[l], b.e1y[l]);
       CHECK(e1.norm() == Approx(1).epsilon(1e-5));
       CHECK((S * e1 - b.lambda1[l] * e1).norm() <= 1e-4 * scale);  // Eq. 9: e1 is the major axis
+      // Eq. 9's endpoints: m + a e1, m - a e1, m + b e2, m - b e2 with a = 3 sqrt(lambda1),
+      // b = 3 sqrt(lambda2), e2 = (-e1.y, e1.x) (up to the rounding of m + len u in float).
+      const Eigen::Vector2d e2(-e1.y(), e1.x());
+      const double tol = 1e-3 + 1e-6 * (std::abs(b.mx[l]) + std::abs(b.my[l]));
+      for (int k = 0; k < 4; ++k) {
+        const double len = 3.0 * std::sqrt(std::max(0.0, static_cast<double>(k < 2 ? b.lambda1[l] : b.lambda2[l])));
+        CHECK(b.axis[k / 2][l] == Approx(len).epsilon(1e-5));
+        const Eigen::Vector2d expect = (k % 2 ? -len : len) * (k < 2 ? e1 : e2);
+        const Eigen::Vector2d d(b.ex[k][l] - static_cast<double>(b.mx[l]), b.ey[k][l] - static_cast<double>(b.my[l]));
+        CHECK((d - expect).norm() <= tol * (1.0 + len));
+      }
     }
   }
   CHECK(front > 300);  // both outcomes are exercised
@@ -130,8 +141,9 @@ TEST_CASE("abr_geometry: a lane's bits do not depend on the other lanes") {
       auto same = [&](const float* a, const float* b) { return std::bit_cast<std::uint32_t>(a[l]) == std::bit_cast<std::uint32_t>(b[0]); };
       bool ok = same(run.front, alone.front) && same(run.mx, alone.mx) && same(run.my, alone.my) && same(run.det, alone.det) &&
                 same(run.lambda1, alone.lambda1) && same(run.lambda2, alone.lambda2) && same(run.e1x, alone.e1x) &&
-                same(run.e1y, alone.e1y);
+                same(run.e1y, alone.e1y) && same(run.axis[0], alone.axis[0]) && same(run.axis[1], alone.axis[1]);
       for (int d = 0; d < 3; ++d) ok = ok && same(run.qx[d], alone.qx[d]) && same(run.qy[d], alone.qy[d]);
+      for (int k = 0; k < 4; ++k) ok = ok && same(run.ex[k], alone.ex[k]) && same(run.ey[k], alone.ey[k]);
       differing += !ok;
     }
   }

@@ -99,27 +99,33 @@ struct AbrBatch {
   alignas(64) float qx[3][L], qy[3][L];  // q_d = J R_w r_d (B.7)
   alignas(64) float det[L];         // det Sigma2D
   alignas(64) float lambda1[L], lambda2[L], e1x[L], e1y[L];  // eigen-decomposition of Sigma2D (Eq. 9)
+  // Eq. 9's semi-axes a = sigma_c sqrt(max(lambda1, 0)), b (the same of lambda2), and the four
+  // 3-sigma endpoints m + a e1, m - a e1, m + b e2, m - b e2 (e2 = (-e1.y, e1.x)), in that order.
+  alignas(64) float axis[2][L];
+  alignas(64) float ex[4][L], ey[4][L];
 
   Eigen::Vector2f m(std::size_t l) const { return {mx[l], my[l]}; }
   Eigen::Vector2f q(int d, std::size_t l) const { return {qx[d][l], qy[d][l]}; }
 };
 
-// Eq. 10 and B.7 for simd::width Gaussians: means x, y, z, rotations rot[e] (R(e % 3, e / 3),
-// column-major) and scales s[d], each a pointer to simd::width consecutive values. The
-// perspective Jacobian is perspective_jacobian's (tx/z, ty/z clamped); Sigma2D = sum_d s_d^2
-// q_d q_d^T + eps2d I. Kept out of line: every caller runs the same instructions, so a Gaussian
+// Eq. 9-10 and B.7 for simd::width Gaussians: means x, y, z, rotations rot[e] (R(e % 3, e / 3),
+// column-major) and scales s[d], each a pointer to simd::width consecutive values; endpoints at
+// sigma_c standard deviations. The perspective Jacobian is perspective_jacobian's (tx/z, ty/z
+// clamped); Sigma2D = sum_d s_d^2 q_d q_d^T + eps2d I. Kept out of line: every caller runs the same instructions, so a Gaussian
 // gets the same bits whichever lane or caller computes it.
 [[gnu::noinline]] inline void abr_geometry(const AbrCamera& C, const float* x, const float* y, const float* z,
-                                           const float* const rot[9], const float* const s[3], AbrBatch& out) {
+                                           const float* const rot[9], const float* const s[3], float sigma_c,
+                                           AbrBatch& out) {
   using B = simd::batch<float>;
-  const B X = B::load_unaligned(x), Y = B::load_unaligned(y), Z = B::load_unaligned(z);
+  const B X = B::load_unaligned(x), Y = B::load_unaligned(y), Z = B::load_unaligned(z), zero(0.f);
   auto row = [&](int r) {  // t = R_w mu + t_w
     return simd::fma(B(C.R[3 * r]), X, simd::fma(B(C.R[3 * r + 1]), Y, simd::fma(B(C.R[3 * r + 2]), Z, B(C.t[r]))));
   };
   const B tx = row(0), ty = row(1), tz = row(2);
-  simd::select((tz >= B(C.near_plane)) & (tz <= B(C.far_plane)), B(1.f), B(0.f)).store_aligned(out.front);
-  (B(C.fx) * tx / tz + B(C.cx)).store_aligned(out.mx);  // m = (fx x / z + cx, fy y / z + cy)
-  (B(C.fy) * ty / tz + B(C.cy)).store_aligned(out.my);
+  simd::select((tz >= B(C.near_plane)) & (tz <= B(C.far_plane)), B(1.f), zero).store_aligned(out.front);
+  const B mx = B(C.fx) * tx / tz + B(C.cx), my = B(C.fy) * ty / tz + B(C.cy);  // m = (fx x / z + cx, fy y / z + cy)
+  mx.store_aligned(out.mx);
+  my.store_aligned(out.my);
   // Perspective Jacobian (B.7), its rows (j0, 0, j2) and (0, j4, j5).
   const B rz = B(1.f) / tz, rz2 = rz * rz;
   const B cx = tz * simd::min(B(C.lim_x_pos), simd::max(-B(C.lim_x_neg), tx * rz));
@@ -149,6 +155,16 @@ struct AbrBatch {
   E.lambda2.store_aligned(out.lambda2);
   E.e1x.store_aligned(out.e1x);
   E.e1y.store_aligned(out.e1y);
+  const B a1 = B(sigma_c) * simd::sqrt(simd::max(E.lambda1, zero));  // Eq. 9: a, b
+  const B b1 = B(sigma_c) * simd::sqrt(simd::max(E.lambda2, zero));
+  a1.store_aligned(out.axis[0]);
+  b1.store_aligned(out.axis[1]);
+  const B ux[4] = {E.e1x, -E.e1x, -E.e1y, E.e1y}, uy[4] = {E.e1y, -E.e1y, E.e1x, -E.e1x};
+  for (int k = 0; k < 4; ++k) {
+    const B len = k < 2 ? a1 : b1;
+    (mx + len * ux[k]).store_aligned(out.ex[k]);
+    (my + len * uy[k]).store_aligned(out.ey[k]);
+  }
 }
 
 }  // namespace vcar

@@ -125,6 +125,14 @@ inline int last_sample_that_can_beat(float beat, float lambda, const std::array<
   return k < static_cast<float>(samples) ? std::min(samples - 1, static_cast<int>(k) + 2) : samples - 1;
 }
 
+// mask_at without branches: true when (u, v) lies inside the image on a foreground pixel.
+inline bool foreground_at(const Mask& m, float u, float v) {
+  const bool in = (u >= 0.f) & (v >= 0.f) & (u < static_cast<float>(m.width)) & (v < static_cast<float>(m.height));
+  const std::size_t i = static_cast<std::size_t>(static_cast<int>(in ? v : 0.f)) * static_cast<std::size_t>(m.width) +
+                        static_cast<std::size_t>(static_cast<int>(in ? u : 0.f));
+  return in & (m.data[i] != 0);
+}
+
 // Lane l of `g` (abr_geometry of one view), a Gaussian with scales s whose centre lies on the
 // mask's foreground (B.1): the 3-sigma endpoints (Eq. 9) and, for each endpoint outside the mask,
 // Eq. 11-13 (B.3). A degenerate covariance is not eligible (as project_gaussian, rule (e)).
@@ -132,21 +140,26 @@ inline int last_sample_that_can_beat(float beat, float lambda, const std::array<
 // BoundaryRefinement). An endpoint whose factor, clamped, cannot be below beat[d*] is not
 // traced (its f stays +inf): the clamped minimum over views is the same, the march shorter or
 // none. Without it every overflowing endpoint is traced in full.
-inline AbrObservation observe_lane(const Mask& mask, const AbrBatch& g, std::size_t l, const Eigen::Vector3f& s,
+[[gnu::always_inline]] inline AbrObservation observe_lane(const Mask& mask, const AbrBatch& g, std::size_t l, const Eigen::Vector3f& s,
                                    const AbrParams& p, const std::array<float, 3>* beat = nullptr) {
   AbrObservation obs;
   if (!(g.det[l] > 0.f) || !(1.f >= p.projection.alpha_min)) return obs;  // degenerate: rule (e)
   obs.eligible = true;
+  // Endpoints m +- a e1, m +- b e2 (Eq. 9) outside the foreground or the image (B.1), one bit
+  // each, looked up without a branch per endpoint: most Gaussians have none.
+  unsigned outside = 0;
+  for (int k = 0; k < 4; ++k) outside |= static_cast<unsigned>(!foreground_at(mask, g.ex[k][l], g.ey[k][l])) << k;
+  if (!outside) return obs;
+  obs.overflow = true;
   const Eigen::Vector2f m = g.m(l), e1(g.e1x[l], g.e1y[l]);
   const std::array<Eigen::Vector2f, 3> q{g.q(0, l), g.q(1, l), g.q(2, l)};
   const float lambdas[2] = {std::max(g.lambda1[l], 0.f), std::max(g.lambda2[l], 0.f)};
   const Eigen::Vector2f axes[2] = {e1, Eigen::Vector2f(-e1.y(), e1.x())};
-  for (int k = 0; k < 4; ++k) {  // endpoints m +- a e1, m +- b e2 (Eq. 9)
+  for (int k = 0; k < 4; ++k) {
+    if (!((outside >> k) & 1u)) continue;
     const float lambda = lambdas[k >> 1];
     const Eigen::Vector2f u = (k & 1) ? Eigen::Vector2f(-axes[k >> 1]) : axes[k >> 1];
-    const float L = p.sigma_c * std::sqrt(lambda);  // a or b
-    if (mask_at(mask, m.x() + L * u.x(), m.y() + L * u.y())) continue;
-    obs.overflow = true;
+    const float L = g.axis[k >> 1][l];  // a or b
     const std::array<float, 3> w = axis_contributions(q, s, u);  // Eq. 11
     const int d_star = w[1] > w[0] ? (w[2] > w[1] ? 2 : 1) : (w[2] > w[0] ? 2 : 0);  // d* = argmax w_d (Eq. 11)
     float l_u = L;
@@ -184,7 +197,7 @@ inline AbrObservation observe_gaussian(const Camera& cam, const Mask& mask, cons
   const float* const rot[9] = {col[3], col[4], col[5], col[6], col[7], col[8], col[9], col[10], col[11]};
   const float* const sc[3] = {col[12], col[13], col[14]};
   AbrBatch g;
-  abr_geometry(AbrCamera::from(cam, p.projection), col[0], col[1], col[2], rot, sc, g);
+  abr_geometry(AbrCamera::from(cam, p.projection), col[0], col[1], col[2], rot, sc, p.sigma_c, g);
   if (!(g.front[0] > 0.f) || !mask_at(mask, g.mx[0], g.my[0])) return {};  // B.1, rule (e)
   return observe_lane(mask, g, 0, s, p);
 }
@@ -519,7 +532,7 @@ class BoundaryRefinement {
                                  rot_[3].data() + j, rot_[4].data() + j, rot_[5].data() + j,
                                  rot_[6].data() + j, rot_[7].data() + j, rot_[8].data() + j};
     const float* const s[3] = {s_[0].data() + j, s_[1].data() + j, s_[2].data() + j};
-    abr_geometry(C, mu_[0].data() + j, mu_[1].data() + j, mu_[2].data() + j, rot, s, g);
+    abr_geometry(C, mu_[0].data() + j, mu_[1].data() + j, mu_[2].data() + j, rot, s, params_.sigma_c, g);
   }
 
   // max_d s_d^2 of slot j: the largest eigenvalue of its 3D covariance R S^2 R^T; +inf when a
