@@ -60,3 +60,37 @@ TEST_CASE("MaskTiles: none and all are exact, mixed is conservative, tile-aligne
   CHECK(t.classify(0, 0, 9, 9) == MaskTiles::foreground);
   CHECK(t.classify(-3, 4, 5, 40) == MaskTiles::foreground);  // clipped to the image
 }
+
+TEST_CASE("MaskTiles: packed bits, one 64-bit word per 8 x 8 tile, equal the mask and are 0 past its edges") {
+  std::mt19937 rng(9);
+  for (auto [W, H] : {std::pair{64, 48}, std::pair{37, 29}, std::pair{8, 1}, std::pair{1000, 700}}) {
+    Mask m(W, H, 1, 0);
+    std::bernoulli_distribution fg(0.4);
+    for (auto& b : m.data) b = fg(rng) ? static_cast<std::uint8_t>(1 + rng() % 255) : 0;  // any nonzero value
+    MaskTiles t;
+    t.build(m);  // 1000 x 700 packs its tile rows in parallel
+    const int tw = (W + 7) / 8, th = (H + 7) / 8;
+    REQUIRE(t.tiles_x() == tw);
+    std::size_t wrong = 0;
+    for (int ty = 0; ty < th; ++ty)
+      for (int tx = 0; tx < tw; ++tx)
+        for (int b = 0; b < 64; ++b) {  // bit (y % 8) * 8 + x % 8 of word ty * tw + tx
+          const int x = tx * 8 + b % 8, y = ty * 8 + b / 8;
+          const bool want = x < W && y < H && m(x, y) != 0;
+          const bool got = (t.words()[static_cast<std::size_t>(ty) * tw + tx] >> b) & 1u;
+          wrong += got != want;
+          if (x < W && y < H) wrong += t.at(x, y) != want;
+        }
+    INFO(W << "x" << H);
+    CHECK(wrong == 0);
+  }
+  // Hand value: pixel (9, 10) of a 16 x 16 mask is tile (1, 1) = word 3, bit 2 * 8 + 1 = 17.
+  Mask one(16, 16, 1, 0);
+  one(9, 10) = 255;
+  MaskTiles t;
+  t.build(one);
+  CHECK(t.words()[3] == (std::uint64_t{1} << 17));
+  CHECK(t.words()[0] == 0);
+  CHECK(t.words()[1] == 0);
+  CHECK(t.words()[2] == 0);
+}

@@ -50,10 +50,10 @@ struct MeanProjection {
 
 inline constexpr std::size_t mean_batch = simd::width;
 
-// Eq. 1 for one batch of means, in registers: pixel index row * W + col of the containing
-// pixel (0 when invisible), visibility (0/1) and camera depth z per lane.
+// Eq. 1 for one batch of means, in registers: the containing pixel's column iu, row iv and index
+// pix = iv * W + iu (all 0 when invisible), visibility (0/1) and camera depth z per lane.
 struct ProjectedBatch {
-  simd::batch<std::int32_t> pix, vis;
+  simd::batch<std::int32_t> pix, vis, iu, iv;
   simd::batch<float> z;
 };
 
@@ -72,7 +72,7 @@ inline ProjectedBatch project(const MeanProjection& w, const float* x, const flo
                   (v >= B(0.f)) & (v < B(static_cast<float>(w.height)));
   const BI iu = simd::to_int(simd::select(in, u, B(0.f)));  // truncation = floor for u >= 0
   const BI iv = simd::to_int(simd::select(in, v, B(0.f)));
-  return {iv * BI(w.width) + iu, simd::to_int(simd::select(in, B(1.f), B(0.f))), tz};
+  return {iv * BI(w.width) + iu, simd::to_int(simd::select(in, B(1.f), B(0.f))), iu, iv, tz};
 }
 
 // project() stored to arrays of mean_batch lanes.

@@ -6,8 +6,8 @@
 // 2 more per extra object in MultiObjectVoting), whatever the number of views.
 // R_i = F_i / max(V_i, 1) (Eq. 3). A view without a mask is "no evidence" (conventions §4).
 //
-// Views are queued (camera + the mask packed to 1 bit per pixel, W H / 8 bytes, and summarised
-// in 8 x 8 tiles) and voted in blocks of a few views per pass over the candidates, so the means
+// Views are queued (camera + the mask packed to 1 bit per pixel in 8 x 8 tiles, W H / 8 bytes,
+// and summarised per tile: MaskTiles) and voted in blocks of a few views per pass over the candidates, so the means
 // are read once per block and the packed masks stay in cache. The candidates are voted in
 // Morton-ordered chunks: a view decides a whole chunk at once where the chunk's box projects
 // clearly outside the image, or clearly inside it onto mask tiles that are all background or all
@@ -44,36 +44,14 @@ namespace vcar {
 
 namespace detail {
 
-// Nonzero bytes of `m` to bits, bit p = row * W + col, LSB first (little-endian: bit p is also
-// bit p % 32 of 32-bit word p / 32, which the gather in vote_chunks reads).
-inline void pack_mask_bits(const Mask& m, std::uint8_t* bits) {
-  const std::size_t n = m.pixels(), full = n / 8;
-  const std::uint8_t* src = m.data.data();
-  for (std::size_t w = 0; w < full; ++w) {
-    std::uint64_t v;
-    std::memcpy(&v, src + 8 * w, 8);
-    // High bit of each byte set iff the byte is nonzero (no carry crosses a byte).
-    std::uint64_t t = (v | ((v & 0x7f7f7f7f7f7f7f7fULL) + 0x7f7f7f7f7f7f7f7fULL)) & 0x8080808080808080ULL;
-    // Gather the 8 high bits into the top byte: byte j -> bit 56 + j (distinct partial products).
-    bits[w] = static_cast<std::uint8_t>(((t >> 7) * 0x0102040810204080ULL) >> 56);
-  }
-  if (full * 8 < n) {
-    std::uint8_t b = 0;
-    for (std::size_t p = full * 8; p < n; ++p) b |= static_cast<std::uint8_t>((src[p] != 0) << (p - full * 8));
-    bits[full] = b;
-  }
-}
-
-static_assert(std::endian::native == std::endian::little, "packed masks are read as little-endian words");
+static_assert(std::endian::native == std::endian::little, "packed tiles are read as little-endian 32-bit words");
 
 inline constexpr int max_vote_objects = 64;  // objects voted in one pass (MultiObjectVoting)
 
-// One queued view: the projection, where its objects' packed masks and tile summaries are, and
-// whether it adds (+1) or takes back (-1) its votes.
+// One queued view: the projection, where its objects' packed masks (MaskTiles) are, and whether
+// it adds (+1) or takes back (-1) its votes.
 struct VoteView {
   MeanProjection P;
-  std::size_t bits_offset = 0;      // object k's bits at bits_offset + k * bytes_per_mask
-  std::size_t bytes_per_mask = 0;
   std::size_t tiles_offset = 0;     // object k's MaskTiles at tiles_offset + k
   int sign = 1;
   const float* depth = nullptr;     // occlusion-aware only (voted alone)
@@ -83,7 +61,6 @@ struct VoteView {
   static VoteView from(const Camera& c) {
     VoteView v;
     v.P = MeanProjection::from(c);
-    v.bytes_per_mask = (static_cast<std::size_t>(c.width) * c.height + 31) / 32 * 4;  // whole 32-bit words
     return v;
   }
 };
@@ -118,7 +95,7 @@ struct ChunkedMeans {
 // n_objects rows of stride `n`. Per chunk, counts over the queued views are summed in 32-bit
 // arrays (SIMD adds, in L1) plus per-chunk constants, and added to the uint16 counters once.
 inline void vote_chunks(const ChunkedMeans& cm, std::size_t c0, std::size_t c1, std::span<const VoteView> views,
-                        const std::uint8_t* bits, const MaskTiles* tiles, int n_objects, std::uint16_t* visible,
+                        const MaskTiles* tiles, int n_objects, std::uint16_t* visible,
                         std::uint16_t* fg, std::size_t n) {
   using BI = simd::batch<std::int32_t>;
   constexpr std::size_t L = mean_batch, C = ChunkedMeans::chunk_size;
@@ -168,7 +145,11 @@ inline void vote_chunks(const ChunkedMeans& cm, std::size_t c0, std::size_t c1, 
           const BI sv = p.vis * sign;
           std::int32_t* av = acc + (i0 - j0);
           (BI::load_aligned(av) + sv).store_aligned(av);
-          const BI word_index = p.pix >> 5, shift = p.pix & BI(31);  // bit p is bit p % 32 of word p / 32
+          // Pixel (u, v) is bit (v % 8) * 8 + u % 8 of tile word (v / 8) * tiles_x + u / 8
+          // (MaskTiles), i.e. bit ((v % 4) * 8 + u % 8) of its 32-bit half (v % 8) / 4.
+          const BI tile_row = (p.iv >> 3) * BI(tiles[w.tiles_offset].tiles_x());
+          const BI word_index = ((tile_row + (p.iu >> 3)) << 1) + ((p.iv >> 2) & BI(1));
+          const BI shift = ((p.iv & BI(3)) << 3) + (p.iu & BI(7));
           for (std::size_t k = o0; k < k1; ++k) {
             if (content[k] == MaskTiles::background) continue;
             std::int32_t* af = acc + (1 + k - o0) * C + (i0 - j0);
@@ -176,7 +157,7 @@ inline void vote_chunks(const ChunkedMeans& cm, std::size_t c0, std::size_t c1, 
               (BI::load_aligned(af) + sv).store_aligned(af);
               continue;
             }
-            const auto* words = reinterpret_cast<const std::int32_t*>(bits + w.bits_offset + k * w.bytes_per_mask);
+            const auto* words = reinterpret_cast<const std::int32_t*>(tiles[w.tiles_offset + k].words());
             const BI f = ((simd::gather(words, word_index) >> shift) & BI(1)) * sv;
             (BI::load_aligned(af) + f).store_aligned(af);
           }
@@ -276,11 +257,9 @@ public:
     const std::size_t per_task = std::max<std::size_t>(1, chunk / detail::ChunkedMeans::chunk_size);
     const std::int64_t chunks = static_cast<std::int64_t>(means_.chunks());
     parallel_chunks(chunks, static_cast<std::int64_t>(per_task), [&](std::int64_t, std::int64_t b, std::int64_t e) {
-      detail::vote_chunks(means_, static_cast<std::size_t>(b), static_cast<std::size_t>(e), queue_, bits_.data(),
-                          tiles_.data(), n_objects_, visible_.data(), fg_.data(), n_);
+      detail::vote_chunks(means_, static_cast<std::size_t>(b), static_cast<std::size_t>(e), queue_, tiles_.data(), n_objects_, visible_.data(), fg_.data(), n_);
     });
     queue_.clear();
-    bits_.clear();
   }
 
   // Counters of candidate k: views where it is visible (label != -1) / foreground for object o.
@@ -323,10 +302,10 @@ public:
     return out;
   }
 
-  // Bytes held: counters, sorted means and order, packed masks and tile summaries.
+  // Bytes held: counters, sorted means and order, packed masks with their tile summaries.
   std::size_t bytes() const {
     std::size_t b = (visible_.capacity() + fg_.capacity()) * sizeof(std::uint16_t) + rank_.capacity() * 4 +
-                    means_.order.capacity() * 4 + means_.box.capacity() * sizeof(means_.box[0]) + bits_.capacity();
+                    means_.order.capacity() * 4 + means_.box.capacity() * sizeof(means_.box[0]);
     for (const auto& c : means_.xyz) b += c.capacity() * sizeof(float);
     for (const auto& t : tiles_) b += t.bytes();
     return b;
@@ -340,14 +319,9 @@ private:
     check_view(camera, masks, sign);
     detail::VoteView w = detail::VoteView::from(camera);
     w.sign = sign;
-    w.bits_offset = bits_.size();
     w.tiles_offset = queue_.size() * static_cast<std::size_t>(n_objects_);
-    bits_.resize(bits_.size() + w.bytes_per_mask * n_objects_);
     if (tiles_.size() < w.tiles_offset + n_objects_) tiles_.resize(w.tiles_offset + n_objects_);
-    for (int k = 0; k < n_objects_; ++k) {
-      detail::pack_mask_bits(*masks[k], bits_.data() + w.bits_offset + k * w.bytes_per_mask);
-      tiles_[w.tiles_offset + k].build(*masks[k]);
-    }
+    for (int k = 0; k < n_objects_; ++k) tiles_[w.tiles_offset + k].build(*masks[k]);
     queue_.push_back(w);
     views_ = sign > 0 ? views_ + 1 : views_ - 1;
     return true;
@@ -394,8 +368,7 @@ private:
   mutable std::vector<std::uint16_t> visible_;  // V_i, by sorted position
   mutable std::vector<std::uint16_t> fg_;       // F_i per object, object-major, by sorted position
   mutable std::vector<detail::VoteView> queue_;
-  mutable std::vector<std::uint8_t> bits_;
-  std::vector<MaskTiles> tiles_;                // per queued view and object (capacity reused)
+  std::vector<MaskTiles> tiles_;                // per queued view and object: packed masks (capacity reused)
 };
 
 // Eq. 1-3 for one object.

@@ -1,67 +1,76 @@
 #pragma once
-// A mask summarised in 8 x 8 pixel tiles, to answer "is this rectangle all background, all
-// foreground, or mixed?" in O(1): two integral images over the tile grid count the tiles with
-// some foreground pixel and the tiles whose pixels are all foreground. The answer is exact for
-// "none" and "all" and conservative otherwise (a rectangle that covers part of a mixed tile is
-// "mixed" even if its own pixels agree). Foreground = nonzero byte, as everywhere in voting.
+// A mask packed to bits in 8 x 8 pixel tiles, one 64-bit word per tile, and summarised to answer
+// "is this rectangle all background, all foreground, or mixed?" in O(1).
+//
+// The bits: tile (tx, ty) is word ty * tiles_x() + tx, pixel (x, y) its bit (y % 8) * 8 + x % 8,
+// so a few neighbouring pixels share one or two cache lines whatever their rows (voting's lookups
+// of Morton-ordered means). Foreground = nonzero byte, as everywhere in voting; pixels past the
+// image's right and bottom edges are 0.
+//
+// The summary: two integral images over the tile grid count the tiles with some foreground pixel
+// and the tiles whose pixels are all foreground. The answer is exact for "none" and "all" and
+// conservative otherwise (a rectangle that covers part of a mixed tile is "mixed" even if its own
+// pixels agree).
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <vector>
 
 #include "vcar/core/image.hpp"
+#include "vcar/core/parallel.hpp"
 
 namespace vcar {
 
 class MaskTiles {
 public:
   static constexpr int tile = 8;
+  static constexpr std::size_t parallel_pixels = std::size_t{1} << 18;  // masks this large pack in parallel
   enum Content : std::uint8_t { background = 0, mixed = 1, foreground = 2 };
 
-  // Rebuilds for `m` (capacity is kept: no allocation when the size does not grow).
+  // Rebuilds for `m` (capacity is kept: no allocation when the size does not grow). One pass over
+  // the mask's bytes packs the tiles (rows of tiles in parallel for large masks); the summary is
+  // read from the tile words.
   void build(const Mask& m) {
     width_ = m.width;
     height_ = m.height;
     tw_ = (m.width + tile - 1) / tile;
     th_ = (m.height + tile - 1) / tile;
-    const std::size_t stride = static_cast<std::size_t>(tw_) + 1;
-    any_.assign(stride * (static_cast<std::size_t>(th_) + 1), 0);
-    all_.assign(any_.size(), 0);
-    row_any_.assign(static_cast<std::size_t>(tw_), 0);
-    row_all_.assign(static_cast<std::size_t>(tw_), 0);
+    words_.resize(static_cast<std::size_t>(tw_) * th_);  // each tile row zeroed by its packer
     const std::uint8_t* src = m.data.data();
-    for (int ty = 0; ty < th_; ++ty) {
-      std::fill(row_any_.begin(), row_any_.end(), 0);
-      std::fill(row_all_.begin(), row_all_.end(), 1);
-      const int y1 = std::min(height_, (ty + 1) * tile);
-      for (int y = ty * tile; y < y1; ++y) {
+    const int whole = width_ / tile, rest = width_ - whole * tile;
+    const auto pack_tile_row = [&](std::int64_t ty) {  // writes tile row ty's words only
+      std::uint64_t* out = words_.data() + static_cast<std::size_t>(ty) * tw_;
+      std::fill(out, out + tw_, std::uint64_t{0});
+      for (int y = static_cast<int>(ty) * tile; y < std::min(height_, static_cast<int>(ty + 1) * tile); ++y) {
         const std::uint8_t* row = src + static_cast<std::size_t>(y) * width_;
-        int tx = 0;
-        for (; (tx + 1) * tile <= width_; ++tx) {  // whole tiles: one 8-byte word
+        const int shift = 8 * (y % tile);
+        for (int tx = 0; tx < whole; ++tx) {  // whole tiles: one 8-byte load
           std::uint64_t v;
           std::memcpy(&v, row + tx * tile, 8);
-          const std::uint64_t nz = nonzero_bytes(v);
-          row_any_[tx] |= nz != 0;
-          row_all_[tx] &= nz == 0x8080808080808080ULL;
+          out[tx] |= static_cast<std::uint64_t>(byte_bits(v)) << shift;
         }
-        if (tx < tw_) {  // the last, partial tile
-          const int n = width_ - tx * tile;
+        if (rest > 0) {  // the last, partial tile
           std::uint64_t v = 0;
-          std::memcpy(&v, row + tx * tile, static_cast<std::size_t>(n));
-          const std::uint64_t nz = nonzero_bytes(v);
-          row_any_[tx] |= nz != 0;
-          row_all_[tx] &= nz == (0x8080808080808080ULL >> (8 * (8 - n)));
+          std::memcpy(&v, row + whole * tile, static_cast<std::size_t>(rest));
+          out[whole] |= static_cast<std::uint64_t>(byte_bits(v)) << shift;
         }
       }
-      std::uint32_t run_any = 0, run_all = 0;
-      for (int tx = 0; tx < tw_; ++tx) {
-        run_any += row_any_[tx];
-        run_all += row_all_[tx];
-        const std::size_t at = (static_cast<std::size_t>(ty) + 1) * stride + tx + 1;
-        any_[at] = any_[at - stride] + run_any;
-        all_[at] = all_[at - stride] + run_all;
-      }
-    }
+    };
+    if (m.pixels() >= parallel_pixels)
+      parallel_for(th_, pack_tile_row);
+    else
+      for (int ty = 0; ty < th_; ++ty) pack_tile_row(ty);
+    summarise();
+  }
+
+  int width() const noexcept { return width_; }
+  int height() const noexcept { return height_; }
+  int tiles_x() const noexcept { return tw_; }
+  // The tile words (see the top of the file), tiles_x() x ceil(height / 8).
+  const std::uint64_t* words() const noexcept { return words_.data(); }
+  // Pixel (x, y) of the mask, 0 <= x < width, 0 <= y < height.
+  bool at(int x, int y) const {
+    return (words_[static_cast<std::size_t>(y / tile) * tw_ + x / tile] >> ((y % tile) * tile + x % tile)) & 1u;
   }
 
   // Content of the pixel rectangle [x0, x1] x [y0, y1] (inclusive; clipped to the image).
@@ -79,17 +88,50 @@ public:
     return mixed;
   }
 
-  std::size_t bytes() const { return (any_.capacity() + all_.capacity()) * sizeof(std::uint32_t); }
+  // Bytes held: tile words and the two integral images.
+  std::size_t bytes() const {
+    return words_.capacity() * sizeof(std::uint64_t) + (any_.capacity() + all_.capacity()) * sizeof(std::uint32_t);
+  }
 
 private:
-  // High bit of each byte set iff the byte is nonzero (no carry crosses a byte).
-  static std::uint64_t nonzero_bytes(std::uint64_t v) {
-    return (v | ((v & 0x7f7f7f7f7f7f7f7fULL) + 0x7f7f7f7f7f7f7f7fULL)) & 0x8080808080808080ULL;
+  // Bit j set iff byte j of v is nonzero: the high bit of each byte marks a nonzero byte (no
+  // carry crosses a byte), and the multiply gathers the 8 high bits into the top byte (byte j ->
+  // bit 56 + j, distinct partial products).
+  static std::uint8_t byte_bits(std::uint64_t v) {
+    const std::uint64_t nz = (v | ((v & 0x7f7f7f7f7f7f7f7fULL) + 0x7f7f7f7f7f7f7f7fULL)) & 0x8080808080808080ULL;
+    return static_cast<std::uint8_t>(((nz >> 7) * 0x0102040810204080ULL) >> 56);
+  }
+
+  // The integral images of "some foreground" and "all foreground" over the tile grid.
+  void summarise() {
+    const std::size_t stride = static_cast<std::size_t>(tw_) + 1;
+    any_.resize(stride * (static_cast<std::size_t>(th_) + 1));  // row and column 0 zeroed, the rest written
+    all_.resize(any_.size());
+    std::fill(any_.begin(), any_.begin() + static_cast<std::ptrdiff_t>(stride), 0u);
+    std::fill(all_.begin(), all_.begin() + static_cast<std::ptrdiff_t>(stride), 0u);
+    const int rest_x = width_ - (tw_ - 1) * tile, rest_y = height_ - (th_ - 1) * tile;
+    for (int ty = 0; ty < th_; ++ty) {
+      const int rows = ty + 1 < th_ ? tile : rest_y;
+      std::uint32_t run_any = 0, run_all = 0;
+      any_[(static_cast<std::size_t>(ty) + 1) * stride] = all_[(static_cast<std::size_t>(ty) + 1) * stride] = 0;
+      for (int tx = 0; tx < tw_; ++tx) {
+        const int cols = tx + 1 < tw_ ? tile : rest_x;
+        const std::uint64_t row_bits = cols == tile ? 0xffULL : (1ULL << cols) - 1;
+        const std::uint64_t full = rows == tile ? row_bits * 0x0101010101010101ULL
+                                                : row_bits * (0x0101010101010101ULL >> (8 * (tile - rows)));
+        const std::uint64_t w = words_[static_cast<std::size_t>(ty) * tw_ + tx];
+        run_any += w != 0;
+        run_all += w == full;
+        const std::size_t at = (static_cast<std::size_t>(ty) + 1) * stride + tx + 1;
+        any_[at] = any_[at - stride] + run_any;
+        all_[at] = all_[at - stride] + run_all;
+      }
+    }
   }
 
   int width_ = 0, height_ = 0, tw_ = 0, th_ = 0;
-  std::vector<std::uint32_t> any_, all_;        // integral counts over the tile grid
-  std::vector<std::uint8_t> row_any_, row_all_;  // one tile row, scratch
+  std::vector<std::uint64_t> words_;       // the packed tiles
+  std::vector<std::uint32_t> any_, all_;   // integral counts over the tile grid
 };
 
 }  // namespace vcar
