@@ -228,7 +228,8 @@ class BoundaryRefinement {
     for (auto& c : arg_) c.assign(n, no_view);
     n_vis_.assign(n, 0);
     n_ovf_.assign(n, 0);
-    for (std::size_t j = 0; j < n; ++j) {  // internal slot j holds candidate order[j]
+    parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {  // internal slot j holds candidate order[j]
+      const auto j = static_cast<std::size_t>(jj);
       const std::size_t i = candidates_[order[j]];
       slot_[order[j]] = static_cast<std::uint32_t>(j);
       for (int d = 0; d < 3; ++d) {
@@ -239,11 +240,12 @@ class BoundaryRefinement {
       const Eigen::Matrix3f R = rotation_from_quaternion(scene.rotation[0][i], scene.rotation[1][i],
                                                          scene.rotation[2][i], scene.rotation[3][i]);
       for (int e = 0; e < 9; ++e) rot_[e][j] = R(e % 3, e / 3);
-    }
+    });
     // Chunk boxes of the centres and the largest max_d s_d^2 per chunk (the bound of add_view).
     const std::size_t chunks = (n + kBox - 1) / kBox;
     box_.resize(chunks);
-    for (std::size_t c = 0; c < chunks; ++c) {
+    parallel_for(static_cast<std::int64_t>(chunks), [&](std::int64_t cc) {
+      const auto c = static_cast<std::size_t>(cc);
       const std::size_t j0 = c * kBox, j1 = std::min(n, (c + 1) * kBox);
       const std::array<float, 6> mb = detail::mean_box(mu_[0].data(), mu_[1].data(), mu_[2].data(), j0, j1);
       std::array<float, 7> b{mb[0], mb[1], mb[2], mb[3], mb[4], mb[5], 0.f};
@@ -252,7 +254,7 @@ class BoundaryRefinement {
         b[6] = std::isfinite(s2) ? std::max(b[6], s2) : INFINITY;
       }
       box_[c] = b;
-    }
+    });
   }
 
   // One training view with its mask (B.3). Throws vcar::Error naming the view for a bad camera,

@@ -80,13 +80,14 @@ struct ChunkedMeans {
     order = morton_order(x, y, z, n);
     const std::size_t chunks = (n + chunk_size - 1) / chunk_size, padded = chunks * chunk_size;
     const float* src[3] = {x, y, z};
-    for (int d = 0; d < 3; ++d) {
-      xyz[d].assign(padded, std::numeric_limits<float>::quiet_NaN());
-      for (std::size_t j = 0; j < n; ++j) xyz[d][j] = src[d][order[j]];
-    }
+    for (int d = 0; d < 3; ++d) xyz[d].assign(padded, std::numeric_limits<float>::quiet_NaN());
     box.resize(chunks);
-    for (std::size_t c = 0; c < chunks; ++c)
-      box[c] = mean_box(xyz[0].data(), xyz[1].data(), xyz[2].data(), c * chunk_size, std::min(n, (c + 1) * chunk_size));
+    parallel_for(static_cast<std::int64_t>(chunks), [&](std::int64_t c) {  // each chunk its own means and box
+      const std::size_t j0 = static_cast<std::size_t>(c) * chunk_size, j1 = std::min(n, j0 + chunk_size);
+      for (int d = 0; d < 3; ++d)
+        for (std::size_t j = j0; j < j1; ++j) xyz[d][j] = src[d][order[j]];
+      box[c] = mean_box(xyz[0].data(), xyz[1].data(), xyz[2].data(), j0, j1);
+    });
   }
   std::size_t chunks() const { return box.size(); }
 };
