@@ -68,7 +68,7 @@ TEST_CASE("simd: sqrt is correctly rounded, as std::sqrt, bit for bit", "[simd]"
   CHECK(differing == 0);
 }
 
-TEST_CASE("simd: to_int truncates, reduce_add sums, gather reads words[idx]", "[simd]") {
+TEST_CASE("simd: to_int truncates, reduce_add sums, gather reads words[idx], integer shifts", "[simd]") {
   alignas(64) float f[L];
   alignas(64) std::int32_t idx[L], got[L];
   for (std::size_t l = 0; l < L; ++l) f[l] = 0.5f + 1.25f * static_cast<float>(l);
@@ -85,7 +85,10 @@ TEST_CASE("simd: to_int truncates, reduce_add sums, gather reads words[idx]", "[
   for (std::size_t l = 0; l < L; ++l) idx[l] = static_cast<std::int32_t>((l * 37 + 11) % words.size());
   simd::gather(words.data(), BI::load_aligned(idx)).store_aligned(got);
   for (std::size_t l = 0; l < L; ++l) CHECK(got[l] == words[static_cast<std::size_t>(idx[l])]);
-  // The voting's bit lookup: (word >> (p & 31)) & 1 with shifts by a batch and by a constant.
+  // Shifts left by a constant (the voting's tile-word index: (tile << 1) + half).
+  ((BI::load_aligned(idx) << 1) + BI(1)).store_aligned(got);
+  for (std::size_t l = 0; l < L; ++l) CHECK(got[l] == 2 * idx[l] + 1);
+  // A bit lookup: (word >> (p & 31)) & 1 with shifts by a batch and by a constant.
   const BI p = BI::load_aligned(idx) * BI(7);
   ((simd::gather(words.data(), p >> 5) >> (p & BI(31))) & BI(1)).store_aligned(got);
   for (std::size_t l = 0; l < L; ++l) {

@@ -169,6 +169,7 @@ struct batch {
   friend batch operator&(const batch& a, const batch& b) { return zip(a, b, [](T x, T y) { return T(x & y); }); }
   friend batch operator>>(const batch& a, const batch& b) { return zip(a, b, [](T x, T y) { return T(x >> y); }); }
   friend batch operator>>(const batch& a, int s) { return map(a, [s](T x) { return T(x >> s); }); }
+  friend batch operator<<(const batch& a, int s) { return map(a, [s](T x) { return T(x << s); }); }
   batch& operator+=(const batch& b) { return *this = *this + b; }
 
   friend batch_bool<T> operator<(const batch& a, const batch& b) { return test(a, b, [](T x, T y) { return x < y; }); }
