@@ -129,6 +129,20 @@ TEST_CASE("the Jacobian clamps tx/z and ty/z to the frustum widened by 30%") {
   CHECK(J2(1, 2) == Approx(-cam.fy * 0.2f / 4.f));
 }
 
+TEST_CASE("JacobianLimits: the frustum's tan half-extents, each side widened by margin x tan_half_fov (hand values)") {
+  // W 100, H 50, fx fy 100, principal point (40, 25): tan_x = 0.5, tan_y = 0.25.
+  const vcar::Camera cam = vcar::Camera::look_at(Eigen::Vector3f(0, 0, -4), Eigen::Vector3f::Zero(),
+                                                 Eigen::Vector3f(0, -1, 0), {100, 50, 100.f, 100.f, 40.f, 25.f});
+  const vcar::JacobianLimits lim = vcar::JacobianLimits::of(cam, 0.3f);
+  CHECK(lim.x_pos == Approx(0.6 + 0.15));  // (W - cx) / fx + 0.3 tan_x
+  CHECK(lim.x_neg == Approx(0.4 + 0.15));  // cx / fx + 0.3 tan_x
+  CHECK(lim.y_pos == Approx(0.25 + 0.075));
+  CHECK(lim.y_neg == Approx(0.25 + 0.075));
+  const vcar::JacobianLimits none = vcar::JacobianLimits::of(cam, 0.f);  // the image's own edges
+  CHECK(none.x_pos == Approx(0.6));
+  CHECK(none.y_neg == Approx(0.25));
+}
+
 TEST_CASE("Monte Carlo: Sigma2D - eps2d is the covariance of the linearised projection") {
   const vcar::Camera cam = test_camera();
   std::mt19937 rng(5);

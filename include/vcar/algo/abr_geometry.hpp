@@ -68,7 +68,7 @@ inline SymmetricEigen2 symmetric_eigen2(const Eigen::Matrix2f& S) {
 // (perspective_jacobian) and eps2d of ProjectionParams.
 struct AbrCamera {
   float R[9], t[3], fx, fy, cx, cy;
-  float lim_x_pos, lim_x_neg, lim_y_pos, lim_y_neg;  // tx/z, ty/z clamp (frustum widened)
+  JacobianLimits lim;  // tx/z, ty/z clamp (frustum widened)
   float near_plane, far_plane, eps2d;
 
   static AbrCamera from(const Camera& c, const ProjectionParams& p) {
@@ -78,12 +78,7 @@ struct AbrCamera {
       a.t[r] = c.t_w[r];
     }
     a.fx = c.fx; a.fy = c.fy; a.cx = c.cx; a.cy = c.cy;
-    const float W = static_cast<float>(c.width), H = static_cast<float>(c.height);
-    const float tan_x = 0.5f * W / c.fx, tan_y = 0.5f * H / c.fy;
-    a.lim_x_pos = (W - c.cx) / c.fx + p.frustum_margin * tan_x;
-    a.lim_x_neg = c.cx / c.fx + p.frustum_margin * tan_x;
-    a.lim_y_pos = (H - c.cy) / c.fy + p.frustum_margin * tan_y;
-    a.lim_y_neg = c.cy / c.fy + p.frustum_margin * tan_y;
+    a.lim = JacobianLimits::of(c, p.frustum_margin);
     a.near_plane = p.near_plane;
     a.far_plane = p.far_plane;
     a.eps2d = p.eps2d;
@@ -128,8 +123,8 @@ struct AbrBatch {
   my.store_aligned(out.my);
   // Perspective Jacobian (B.7), its rows (j0, 0, j2) and (0, j4, j5).
   const B rz = B(1.f) / tz, rz2 = rz * rz;
-  const B cx = tz * simd::min(B(C.lim_x_pos), simd::max(-B(C.lim_x_neg), tx * rz));
-  const B cy = tz * simd::min(B(C.lim_y_pos), simd::max(-B(C.lim_y_neg), ty * rz));
+  const B cx = tz * simd::min(B(C.lim.x_pos), simd::max(-B(C.lim.x_neg), tx * rz));
+  const B cy = tz * simd::min(B(C.lim.y_pos), simd::max(-B(C.lim.y_neg), ty * rz));
   const B j0 = B(C.fx) * rz, j2 = -(B(C.fx) * cx * rz2), j4 = B(C.fy) * rz, j5 = -(B(C.fy) * cy * rz2);
   // M = J R_w (2 x 3).
   B M0[3], M1[3];

@@ -125,14 +125,6 @@ inline int last_sample_that_can_beat(float beat, float lambda, const std::array<
   return k < static_cast<float>(samples) ? std::min(samples - 1, static_cast<int>(k) + 2) : samples - 1;
 }
 
-// mask_at without branches: true when (u, v) lies inside the image on a foreground pixel.
-inline bool foreground_at(const Mask& m, float u, float v) {
-  const bool in = (u >= 0.f) & (v >= 0.f) & (u < static_cast<float>(m.width)) & (v < static_cast<float>(m.height));
-  const std::size_t i = static_cast<std::size_t>(static_cast<int>(in ? v : 0.f)) * static_cast<std::size_t>(m.width) +
-                        static_cast<std::size_t>(static_cast<int>(in ? u : 0.f));
-  return in & (m.data[i] != 0);
-}
-
 // Lane l of `g` (abr_geometry of one view), a Gaussian with scales s whose centre lies on the
 // mask's foreground (B.1): the 3-sigma endpoints (Eq. 9) and, for each endpoint outside the mask,
 // Eq. 11-13 (B.3). A degenerate covariance is not eligible (as project_gaussian, rule (e)).
@@ -148,7 +140,7 @@ inline bool foreground_at(const Mask& m, float u, float v) {
   // Endpoints m +- a e1, m +- b e2 (Eq. 9) outside the foreground or the image (B.1), one bit
   // each, looked up without a branch per endpoint: most Gaussians have none.
   unsigned outside = 0;
-  for (int k = 0; k < 4; ++k) outside |= static_cast<unsigned>(!foreground_at(mask, g.ex[k][l], g.ey[k][l])) << k;
+  for (int k = 0; k < 4; ++k) outside |= static_cast<unsigned>(!mask_at(mask, g.ex[k][l], g.ey[k][l])) << k;
   if (!outside) return obs;
   obs.overflow = true;
   const Eigen::Vector2f m = g.m(l), e1(g.e1x[l], g.e1y[l]);
@@ -564,9 +556,8 @@ class BoundaryRefinement {
     const float zmin = v.zmin * 0.999f;
     if (!(zmin >= p.projection.near_plane * 1.001f) || !(zmin < p.projection.far_plane * 0.999f)) return MaskTiles::mixed;
     // ||J||^2 <= ||J||_F^2 <= (f / z)^2 (2 + (tx/z)^2 + (ty/z)^2), |tx/z|, |ty/z| clamped to the frustum limits.
-    const float W = static_cast<float>(cam.width), H = static_cast<float>(cam.height);
-    const float lx = std::max(W - cam.cx, cam.cx) / cam.fx + p.projection.frustum_margin * 0.5f * W / cam.fx;
-    const float ly = std::max(H - cam.cy, cam.cy) / cam.fy + p.projection.frustum_margin * 0.5f * H / cam.fy;
+    const JacobianLimits lim = JacobianLimits::of(cam, p.projection.frustum_margin);
+    const float lx = std::max(lim.x_pos, lim.x_neg), ly = std::max(lim.y_pos, lim.y_neg);
     const float tmax = 2.f + lx * lx + ly * ly;
     const float f = std::max(cam.fx, cam.fy) / zmin;
     const float lambda1 = f * f * tmax * b[6] + p.projection.eps2d;

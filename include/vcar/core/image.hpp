@@ -32,9 +32,13 @@ using ImageF = Image<float>;            // renderer output (rgb: 3 channels, alp
 
 // Foreground at a continuous point: the pixel containing it (floor); false outside the image.
 inline bool mask_at(const Mask& m, float u, float v) {
-  if (!(u >= 0.f && v >= 0.f && u < static_cast<float>(m.width) && v < static_cast<float>(m.height)))
-    return false;
-  return m.data[static_cast<std::size_t>(static_cast<int>(v)) * m.width + static_cast<int>(u)] != 0;
+  // Without a branch (ABR looks up endpoints and march samples whose outcome the data decides):
+  // outside the image the index is pixel 0's, and the answer false. (An empty mask has no pixel 0.)
+  if (m.data.empty()) return false;
+  const bool in = (u >= 0.f) & (v >= 0.f) & (u < static_cast<float>(m.width)) & (v < static_cast<float>(m.height));
+  const std::size_t i = static_cast<std::size_t>(static_cast<int>(in ? v : 0.f)) * static_cast<std::size_t>(m.width) +
+                        static_cast<std::size_t>(static_cast<int>(in ? u : 0.f));
+  return in & (m.data[i] != 0);
 }
 
 // Float image in [0,1] to 8-bit (round to nearest, clamped).

@@ -31,19 +31,27 @@ struct ProjectedGaussian {
   bool on_screen = false;          // valid and the bounding box overlaps the image (gsplat cull)
 };
 
+// The clamp of tx/z and ty/z in the perspective Jacobian (B.7, as gsplat): the frustum widened by
+// `frustum_margin` of its half-extent, x in [-x_neg, x_pos] and y in [-y_neg, y_pos].
+struct JacobianLimits {
+  float x_pos, x_neg, y_pos, y_neg;
+
+  static JacobianLimits of(const Camera& cam, float frustum_margin) {
+    const float W = static_cast<float>(cam.width), H = static_cast<float>(cam.height);
+    const float tan_x = 0.5f * W / cam.fx, tan_y = 0.5f * H / cam.fy;
+    return {(W - cam.cx) / cam.fx + frustum_margin * tan_x, cam.cx / cam.fx + frustum_margin * tan_x,
+            (H - cam.cy) / cam.fy + frustum_margin * tan_y, cam.cy / cam.fy + frustum_margin * tan_y};
+  }
+};
+
 // Perspective Jacobian at the camera-space mean t (Eq. 10, B.7), tx/z and ty/z clamped to the
-// frustum widened by `frustum_margin`.
+// frustum widened by `frustum_margin` (JacobianLimits).
 inline Eigen::Matrix<float, 2, 3> perspective_jacobian(const Camera& cam, const Eigen::Vector3f& t,
                                                        float frustum_margin = 0.3f) {
-  const float W = static_cast<float>(cam.width), H = static_cast<float>(cam.height);
-  const float tan_x = 0.5f * W / cam.fx, tan_y = 0.5f * H / cam.fy;
-  const float lim_x_pos = (W - cam.cx) / cam.fx + frustum_margin * tan_x;
-  const float lim_x_neg = cam.cx / cam.fx + frustum_margin * tan_x;
-  const float lim_y_pos = (H - cam.cy) / cam.fy + frustum_margin * tan_y;
-  const float lim_y_neg = cam.cy / cam.fy + frustum_margin * tan_y;
+  const JacobianLimits lim = JacobianLimits::of(cam, frustum_margin);
   const float rz = 1.f / t.z(), rz2 = rz * rz;
-  const float tx = t.z() * std::min(lim_x_pos, std::max(-lim_x_neg, t.x() * rz));
-  const float ty = t.z() * std::min(lim_y_pos, std::max(-lim_y_neg, t.y() * rz));
+  const float tx = t.z() * std::min(lim.x_pos, std::max(-lim.x_neg, t.x() * rz));
+  const float ty = t.z() * std::min(lim.y_pos, std::max(-lim.y_neg, t.y() * rz));
   Eigen::Matrix<float, 2, 3> J;
   J << cam.fx * rz, 0.f, -cam.fx * tx * rz2,
        0.f, cam.fy * rz, -cam.fy * ty * rz2;

@@ -1,0 +1,23 @@
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include "vcar/core/image.hpp"
+
+TEST_CASE("mask_at: the pixel containing the point (floor), false outside the image, NaN or an empty mask") {
+  vcar::Mask m(4, 3, 1, 0);
+  m(2, 1) = 7;    // any nonzero value is foreground
+  m(0, 0) = 255;  // pixel 0: what an outside point must not report
+  CHECK(vcar::mask_at(m, 2.f, 1.f));
+  CHECK(vcar::mask_at(m, 2.999f, 1.999f));  // same pixel
+  CHECK_FALSE(vcar::mask_at(m, 3.f, 1.f));  // the next one
+  CHECK_FALSE(vcar::mask_at(m, 1.999f, 1.f));
+  CHECK(vcar::mask_at(m, 0.f, 0.f));
+  for (auto [u, v] : {std::pair{-0.001f, 0.f}, std::pair{0.f, -0.5f}, std::pair{4.f, 0.f}, std::pair{0.f, 3.f},
+                      std::pair{NAN, 0.f}, std::pair{0.f, NAN}, std::pair{-INFINITY, 0.f}, std::pair{1e30f, 1.f}}) {
+    INFO(u << ", " << v);
+    CHECK_FALSE(vcar::mask_at(m, u, v));
+  }
+  CHECK_FALSE(vcar::mask_at(vcar::Mask(), 0.f, 0.f));
+  CHECK_FALSE(vcar::mask_at(vcar::Mask(0, 5, 1, 0), 0.f, 0.f));
+}
