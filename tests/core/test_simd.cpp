@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -94,5 +96,23 @@ TEST_CASE("simd: to_int truncates, reduce_add sums, gather reads words[idx], int
   for (std::size_t l = 0; l < L; ++l) {
     const std::int32_t q = idx[l] * 7;
     CHECK(got[l] == ((words[static_cast<std::size_t>(q >> 5)] >> (q & 31)) & 1));
+  }
+}
+
+TEST_CASE("simd: nonzero_bytes_64 and nonzero_bytes_8 set bit j iff byte j is nonzero", "[simd]") {
+  std::mt19937 rng(17);
+  alignas(64) std::uint8_t bytes[64 + 3];
+  for (int rep = 0; rep < 200; ++rep) {
+    for (auto& b : bytes) b = rng() % 3 == 0 ? static_cast<std::uint8_t>(rng() % 256) : 0;  // 0x80 and 0x01 included
+    bytes[rep % 64] = rep % 2 ? 0x80 : 0x01;
+    for (int offset : {0, 3}) {  // aligned and not
+      const std::uint8_t* p = bytes + offset;
+      std::uint64_t want = 0;
+      for (int j = 0; j < 64; ++j) want |= static_cast<std::uint64_t>(p[j] != 0) << j;
+      CHECK(vcar::simd::nonzero_bytes_64(p) == want);
+      std::uint64_t v;
+      std::memcpy(&v, p, 8);
+      CHECK(vcar::simd::nonzero_bytes_8(v) == (want & 0xffu));
+    }
   }
 }

@@ -18,6 +18,7 @@
 
 #include "vcar/core/image.hpp"
 #include "vcar/core/parallel.hpp"
+#include "vcar/core/simd.hpp"
 
 namespace vcar {
 
@@ -44,15 +45,20 @@ public:
       for (int y = static_cast<int>(ty) * tile; y < std::min(height_, static_cast<int>(ty + 1) * tile); ++y) {
         const std::uint8_t* row = src + static_cast<std::size_t>(y) * width_;
         const int shift = 8 * (y % tile);
-        for (int tx = 0; tx < whole; ++tx) {  // whole tiles: one 8-byte load
+        int tx = 0;
+        for (; tx + 8 <= whole; tx += 8) {  // 8 whole tiles: 64 bytes at once
+          const std::uint64_t bits = simd::nonzero_bytes_64(row + tx * tile);
+          for (int i = 0; i < 8; ++i) out[tx + i] |= ((bits >> (8 * i)) & 0xffu) << shift;
+        }
+        for (; tx < whole; ++tx) {  // whole tiles: one 8-byte load
           std::uint64_t v;
           std::memcpy(&v, row + tx * tile, 8);
-          out[tx] |= static_cast<std::uint64_t>(byte_bits(v)) << shift;
+          out[tx] |= static_cast<std::uint64_t>(simd::nonzero_bytes_8(v)) << shift;
         }
         if (rest > 0) {  // the last, partial tile
           std::uint64_t v = 0;
           std::memcpy(&v, row + whole * tile, static_cast<std::size_t>(rest));
-          out[whole] |= static_cast<std::uint64_t>(byte_bits(v)) << shift;
+          out[whole] |= static_cast<std::uint64_t>(simd::nonzero_bytes_8(v)) << shift;
         }
       }
     };
@@ -94,14 +100,6 @@ public:
   }
 
 private:
-  // Bit j set iff byte j of v is nonzero: the high bit of each byte marks a nonzero byte (no
-  // carry crosses a byte), and the multiply gathers the 8 high bits into the top byte (byte j ->
-  // bit 56 + j, distinct partial products).
-  static std::uint8_t byte_bits(std::uint64_t v) {
-    const std::uint64_t nz = (v | ((v & 0x7f7f7f7f7f7f7f7fULL) + 0x7f7f7f7f7f7f7f7fULL)) & 0x8080808080808080ULL;
-    return static_cast<std::uint8_t>(((nz >> 7) * 0x0102040810204080ULL) >> 56);
-  }
-
   // The integral images of "some foreground" and "all foreground" over the tile grid.
   void summarise() {
     const std::size_t stride = static_cast<std::size_t>(tw_) + 1;

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 
 #if !defined(VCAR_SIMD_SCALAR) && !(defined(__SSE2__) || defined(_M_X64) || defined(__aarch64__))
 #define VCAR_SIMD_SCALAR 1
@@ -34,6 +35,8 @@
 #include <xsimd/xsimd.hpp>
 #if defined(__AVX2__) || defined(__AVX512F__)
 #include <immintrin.h>  // the gathers below: xsimd 8.1 never selects its own AVX2 gather
+#elif defined(__SSE2__)
+#include <emmintrin.h>  // nonzero_bytes_64
 #endif
 #endif
 
@@ -222,5 +225,46 @@ inline batch<std::int32_t> gather(const std::int32_t* words, const batch<std::in
 
 // Lanes of a float batch on this target.
 inline constexpr std::size_t width = batch<float>::size;
+
+// Bit j set iff byte j of v (little-endian) is nonzero: the high bit of each byte marks a
+// nonzero byte (no carry crosses a byte), and the multiply gathers the 8 high bits into the top
+// byte (byte j -> bit 56 + j, distinct partial products).
+inline std::uint8_t nonzero_bytes_8(std::uint64_t v) {
+  const std::uint64_t nz = (v | ((v & 0x7f7f7f7f7f7f7f7fULL) + 0x7f7f7f7f7f7f7f7fULL)) & 0x8080808080808080ULL;
+  return static_cast<std::uint8_t>(((nz >> 7) * 0x0102040810204080ULL) >> 56);
+}
+
+// Bit j set iff byte p[j] is nonzero, for the 64 bytes at p (mask packing: MaskTiles): one
+// AVX-512BW test, two AVX2 or four SSE2 compares with movemask, elsewhere nonzero_bytes_8 eight
+// times. The same bits on every target.
+inline std::uint64_t nonzero_bytes_64(const std::uint8_t* p) {
+#if !defined(VCAR_SIMD_SCALAR) && defined(__AVX512BW__)
+  const __m512i v = _mm512_loadu_si512(p);
+  return _mm512_test_epi8_mask(v, v);
+#elif !defined(VCAR_SIMD_SCALAR) && defined(__AVX2__)
+  const __m256i z = _mm256_setzero_si256();
+  const auto zero_bits = [&](int k) {  // bit j: byte 32 k + j is zero
+    const __m256i v = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + 32 * k));
+    return static_cast<std::uint32_t>(_mm256_movemask_epi8(_mm256_cmpeq_epi8(v, z)));
+  };
+  return ~(static_cast<std::uint64_t>(zero_bits(0)) | static_cast<std::uint64_t>(zero_bits(1)) << 32);
+#elif !defined(VCAR_SIMD_SCALAR) && defined(__SSE2__)
+  const __m128i z = _mm_setzero_si128();
+  std::uint64_t zero = 0;
+  for (int k = 0; k < 4; ++k) {
+    const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 16 * k));
+    zero |= static_cast<std::uint64_t>(static_cast<std::uint32_t>(_mm_movemask_epi8(_mm_cmpeq_epi8(v, z)))) << (16 * k);
+  }
+  return ~zero;
+#else
+  std::uint64_t bits = 0;
+  for (int k = 0; k < 8; ++k) {
+    std::uint64_t v;
+    std::memcpy(&v, p + 8 * k, 8);
+    bits |= static_cast<std::uint64_t>(nonzero_bytes_8(v)) << (8 * k);
+  }
+  return bits;
+#endif
+}
 
 }  // namespace vcar::simd
