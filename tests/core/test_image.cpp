@@ -4,7 +4,7 @@
 
 #include "vcar/core/image.hpp"
 
-TEST_CASE("mask_at: the pixel containing the point (floor), false outside the image, NaN or an empty mask") {
+TEST_CASE("mask_at and mask_at_branchless: the pixel containing the point (floor), false outside the image, NaN or an empty mask") {
   vcar::Mask m(4, 3, 1, 0);
   m(2, 1) = 7;    // any nonzero value is foreground
   m(0, 0) = 255;  // pixel 0: what an outside point must not report
@@ -17,7 +17,18 @@ TEST_CASE("mask_at: the pixel containing the point (floor), false outside the im
                       std::pair{NAN, 0.f}, std::pair{0.f, NAN}, std::pair{-INFINITY, 0.f}, std::pair{1e30f, 1.f}}) {
     INFO(u << ", " << v);
     CHECK_FALSE(vcar::mask_at(m, u, v));
+    CHECK_FALSE(vcar::mask_at_branchless(m, u, v));
   }
   CHECK_FALSE(vcar::mask_at(vcar::Mask(), 0.f, 0.f));
-  CHECK_FALSE(vcar::mask_at(vcar::Mask(0, 5, 1, 0), 0.f, 0.f));
+  CHECK_FALSE(vcar::mask_at_branchless(vcar::Mask(), 0.f, 0.f));
+  CHECK_FALSE(vcar::mask_at_branchless(vcar::Mask(0, 5, 1, 0), 0.f, 0.f));
+  // The two agree on a grid of points in and around the image (every 0.25 px).
+  std::size_t differ = 0, fg = 0;
+  for (float v = -1.f; v <= 4.f; v += 0.25f)
+    for (float u = -1.f; u <= 5.f; u += 0.25f) {
+      differ += vcar::mask_at(m, u, v) != vcar::mask_at_branchless(m, u, v);
+      fg += vcar::mask_at(m, u, v);
+    }
+  CHECK(differ == 0);
+  CHECK(fg == 32);  // pixels (2, 1) and (0, 0), 16 grid points each
 }

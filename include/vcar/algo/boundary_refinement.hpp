@@ -140,7 +140,7 @@ inline int last_sample_that_can_beat(float beat, float lambda, const std::array<
   // Endpoints m +- a e1, m +- b e2 (Eq. 9) outside the foreground or the image (B.1), one bit
   // each, looked up without a branch per endpoint: most Gaussians have none.
   unsigned outside = 0;
-  for (int k = 0; k < 4; ++k) outside |= static_cast<unsigned>(!mask_at(mask, g.ex[k][l], g.ey[k][l])) << k;
+  for (int k = 0; k < 4; ++k) outside |= static_cast<unsigned>(!mask_at_branchless(mask, g.ex[k][l], g.ey[k][l])) << k;
   if (!outside) return obs;
   obs.overflow = true;
   const Eigen::Vector2f m = g.m(l), e1(g.e1x[l], g.e1y[l]);

@@ -32,9 +32,16 @@ using ImageF = Image<float>;            // renderer output (rgb: 3 channels, alp
 
 // Foreground at a continuous point: the pixel containing it (floor); false outside the image.
 inline bool mask_at(const Mask& m, float u, float v) {
-  // Without a branch (ABR looks up endpoints and march samples whose outcome the data decides):
-  // outside the image the index is pixel 0's, and the answer false. (An empty mask has no pixel 0.)
-  if (m.data.empty()) return false;
+  if (!(u >= 0.f && v >= 0.f && u < static_cast<float>(m.width) && v < static_cast<float>(m.height)))
+    return false;
+  return m.data[static_cast<std::size_t>(static_cast<int>(v)) * m.width + static_cast<int>(u)] != 0;
+}
+
+// mask_at without a branch on the bounds, for lookups whose outcome the data decides (ABR's
+// endpoints): outside the image the index is pixel 0's and the answer false. Where the caller has
+// already tested the bounds, mask_at costs less (the compiler merges the two tests).
+inline bool mask_at_branchless(const Mask& m, float u, float v) {
+  if (m.data.empty()) return false;  // no pixel 0
   const bool in = (u >= 0.f) & (v >= 0.f) & (u < static_cast<float>(m.width)) & (v < static_cast<float>(m.height));
   const std::size_t i = static_cast<std::size_t>(static_cast<int>(in ? v : 0.f)) * static_cast<std::size_t>(m.width) +
                         static_cast<std::size_t>(static_cast<int>(in ? u : 0.f));
