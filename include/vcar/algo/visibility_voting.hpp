@@ -7,8 +7,8 @@
 // R_i = F_i / max(V_i, 1) (Eq. 3). A view without a mask is "no evidence" (conventions §4).
 //
 // Views are queued (camera + the mask packed to 1 bit per pixel in 8 x 8 tiles, W H / 8 bytes,
-// and summarised per tile: MaskTiles) and voted in blocks of a few views per pass over the candidates, so the means
-// are read once per block and the packed masks stay in cache. The candidates are voted in
+// and summarised per tile: MaskTiles) and voted in blocks of a few views per pass over the
+// candidates, so the means are read once per block and the packed masks stay in cache. The candidates are voted in
 // Morton-ordered chunks: a view decides a whole chunk at once where the chunk's box projects
 // clearly outside the image, or clearly inside it onto mask tiles that are all background or all
 // foreground; the rest is voted mean by mean. The counts are exactly Eq. 1-2's either way.
@@ -24,7 +24,6 @@
 #include <cassert>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <limits>
 #include <span>
 #include <string>
@@ -258,7 +257,8 @@ public:
     const std::size_t per_task = std::max<std::size_t>(1, chunk / detail::ChunkedMeans::chunk_size);
     const std::int64_t chunks = static_cast<std::int64_t>(means_.chunks());
     parallel_chunks(chunks, static_cast<std::int64_t>(per_task), [&](std::int64_t, std::int64_t b, std::int64_t e) {
-      detail::vote_chunks(means_, static_cast<std::size_t>(b), static_cast<std::size_t>(e), queue_, tiles_.data(), n_objects_, visible_.data(), fg_.data(), n_);
+      detail::vote_chunks(means_, static_cast<std::size_t>(b), static_cast<std::size_t>(e), queue_, tiles_.data(),
+                          n_objects_, visible_.data(), fg_.data(), n_);
     });
     queue_.clear();
   }

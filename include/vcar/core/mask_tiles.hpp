@@ -69,15 +69,9 @@ public:
     summarise();
   }
 
-  int width() const noexcept { return width_; }
-  int height() const noexcept { return height_; }
   int tiles_x() const noexcept { return tw_; }
   // The tile words (see the top of the file), tiles_x() x ceil(height / 8).
   const std::uint64_t* words() const noexcept { return words_.data(); }
-  // Pixel (x, y) of the mask, 0 <= x < width, 0 <= y < height.
-  bool at(int x, int y) const {
-    return (words_[static_cast<std::size_t>(y / tile) * tw_ + x / tile] >> ((y % tile) * tile + x % tile)) & 1u;
-  }
 
   // Content of the pixel rectangle [x0, x1] x [y0, y1] (inclusive; clipped to the image).
   Content classify(int x0, int y0, int x1, int y1) const {
@@ -114,9 +108,8 @@ private:
       any_[(static_cast<std::size_t>(ty) + 1) * stride] = all_[(static_cast<std::size_t>(ty) + 1) * stride] = 0;
       for (int tx = 0; tx < tw_; ++tx) {
         const int cols = tx + 1 < tw_ ? tile : rest_x;
-        const std::uint64_t row_bits = cols == tile ? 0xffULL : (1ULL << cols) - 1;
-        const std::uint64_t full = rows == tile ? row_bits * 0x0101010101010101ULL
-                                                : row_bits * (0x0101010101010101ULL >> (8 * (tile - rows)));
+        // The tile's in-image pixels: `cols` low bits in each of its first `rows` bytes.
+        const std::uint64_t full = ((1ULL << cols) - 1) * (0x0101010101010101ULL >> (8 * (tile - rows)));
         const std::uint64_t w = words_[static_cast<std::size_t>(ty) * tw_ + tx];
         run_any += w != 0;
         run_all += w == full;
