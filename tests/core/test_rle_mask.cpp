@@ -1,6 +1,8 @@
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <random>
+#include <vector>
 
 #include "vcar/core/rle_mask.hpp"
 
@@ -29,4 +31,40 @@ TEST_CASE("a disc costs a few runs per row") {
   const auto r = vcar::RleMask::encode(m);
   CHECK(r.runs.size() <= 2 * 100 + 1);
   CHECK(r.bytes() < m.pixels() / 10);
+}
+
+// The runs pixel by pixel: the definition that encode's 64-pixel words must reproduce.
+static std::vector<std::uint32_t> runs_one_by_one(const vcar::Mask& m) {
+  std::vector<std::uint32_t> runs;
+  bool fg = false;
+  std::uint32_t run = 0;
+  for (std::uint8_t v : m.data) {
+    if ((v != 0) != fg) runs.push_back(run), run = 0, fg = !fg;
+    ++run;
+  }
+  runs.push_back(run);
+  return runs;
+}
+
+TEST_CASE("run lengths equal the pixel-by-pixel runs across 64-pixel words") {
+  std::mt19937 rng(11);
+  // Sizes around whole words; runs from 1 pixel to several words; both ends fore- and background.
+  for (int trial = 0; trial < 200; ++trial) {
+    const int w = 1 + static_cast<int>(rng() % 150), h = 1 + static_cast<int>(rng() % 5);
+    vcar::Mask m(w, h, 1);
+    const unsigned longest = 1u + rng() % 200;
+    bool fg = rng() % 2;
+    for (std::size_t k = 0; k < m.data.size();) {
+      const std::size_t run = 1 + rng() % longest;
+      for (std::size_t i = 0; i < run && k < m.data.size(); ++i, ++k)
+        m.data[k] = fg ? static_cast<std::uint8_t>(1 + rng() % 255) : 0;
+      fg = !fg;
+    }
+    CHECK(vcar::RleMask::encode(m).runs == runs_one_by_one(m));
+  }
+  vcar::Mask all(128, 1, 1), none(64, 2, 1), empty;
+  std::fill(all.data.begin(), all.data.end(), 255);
+  CHECK(vcar::RleMask::encode(all).runs == std::vector<std::uint32_t>{0, 128});
+  CHECK(vcar::RleMask::encode(none).runs == std::vector<std::uint32_t>{128});
+  CHECK(vcar::RleMask::encode(empty).runs == std::vector<std::uint32_t>{0});
 }

@@ -220,10 +220,12 @@ class BoundaryRefinement {
     for (auto& c : arg_) c.assign(n, no_view);
     n_vis_.assign(n, 0);
     n_ovf_.assign(n, 0);
-    parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {  // internal slot j holds candidate order[j]
-      const auto j = static_cast<std::size_t>(jj);
-      const std::size_t i = candidates_[order[j]];
-      slot_[order[j]] = static_cast<std::uint32_t>(j);
+    for (std::size_t j = 0; j < n; ++j) slot_[order[j]] = static_cast<std::uint32_t>(j);  // slot j: candidate order[j]
+    // In candidate order: the scene's columns are read in the candidates' (usually ascending)
+    // order rather than gathered in Morton order, which misses the cache on every read.
+    parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t kk) {
+      const auto k = static_cast<std::size_t>(kk);
+      const std::size_t i = candidates_[k], j = slot_[k];
       for (int d = 0; d < 3; ++d) {
         mu_[d][j] = scene.mean[d][i];
         log_s_[d][j] = scene.log_scale[d][i];

@@ -2,10 +2,12 @@
 // A mask kept as run lengths: what the pipeline holds of a view after voting on it, so the
 // masks ABR needs later cost O(boundary) bytes instead of W x H ("views streamed, not stored").
 #include <algorithm>
+#include <bit>
 #include <cstdint>
 #include <vector>
 
 #include "vcar/core/image.hpp"
+#include "vcar/core/simd.hpp"
 
 namespace vcar {
 
@@ -14,21 +16,33 @@ struct RleMask {
   // Alternating run lengths over the row-major pixels, starting with background (may be 0).
   std::vector<std::uint32_t> runs;
 
+  // 64 pixels at a time: their nonzero bits (simd::nonzero_bytes_64), then one run boundary
+  // per set bit of bits ^ (bits << 1 | previous pixel), found with countr_zero.
   static RleMask encode(const Mask& m) {
     RleMask r;
     r.width = m.width;
     r.height = m.height;
-    bool fg = false;
-    std::uint32_t run = 0;
-    for (std::uint8_t v : m.data) {
-      if ((v != 0) != fg) {
-        r.runs.push_back(run);
-        run = 0;
-        fg = !fg;
+    const std::uint8_t* p = m.data.data();
+    const std::size_t n = m.data.size();
+    std::uint64_t before = 0;  // the pixel before the current 64: 1 if foreground
+    std::size_t start = 0;     // first pixel of the current run
+    auto boundaries = [&](std::size_t base, std::uint64_t bits, std::uint64_t valid) {
+      std::uint64_t t = (bits ^ ((bits << 1) | before)) & valid;  // pixel base + i starts a run
+      before = (bits >> 63) & 1u;
+      for (; t; t &= t - 1) {
+        const std::size_t at = base + static_cast<std::size_t>(std::countr_zero(t));
+        r.runs.push_back(static_cast<std::uint32_t>(at - start));
+        start = at;
       }
-      ++run;
+    };
+    std::size_t b = 0;
+    for (; b + 64 <= n; b += 64) boundaries(b, simd::nonzero_bytes_64(p + b), ~std::uint64_t{0});
+    if (b < n) {  // the last n - b < 64 pixels
+      std::uint64_t bits = 0;
+      for (std::size_t i = b; i < n; ++i) bits |= static_cast<std::uint64_t>(p[i] != 0) << (i - b);
+      boundaries(b, bits, (std::uint64_t{1} << (n - b)) - 1);
     }
-    r.runs.push_back(run);
+    r.runs.push_back(static_cast<std::uint32_t>(n - start));
     return r;
   }
 
