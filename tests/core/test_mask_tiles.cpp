@@ -93,3 +93,31 @@ TEST_CASE("MaskTiles: packed bits, one 64-bit word per 8 x 8 tile, equal the mas
   CHECK(t.words()[1] == 0);
   CHECK(t.words()[2] == 0);
 }
+
+TEST_CASE("MaskTiles::pixels: a batch of lookups equals the mask's bytes") {
+  using BI = vcar::simd::batch<std::int32_t>;
+  constexpr std::size_t L = BI::size;
+  std::mt19937 rng(9);
+  for (auto [W, H] : {std::pair{64, 48}, std::pair{37, 29}, std::pair{301, 203}}) {
+    Mask m(W, H, 1, 0);
+    for (auto& v : m.data) v = rng() % 3 == 0 ? static_cast<std::uint8_t>(1 + rng() % 255) : 0;
+    MaskTiles t;
+    t.build(m);
+    int mismatches = 0, foreground = 0;
+    for (int trial = 0; trial < 500; ++trial) {
+      alignas(64) std::int32_t u[L], v[L], got[L];
+      for (std::size_t l = 0; l < L; ++l) {
+        u[l] = static_cast<std::int32_t>(rng() % W);
+        v[l] = static_cast<std::int32_t>(rng() % H);
+        if (trial == 0 && l < 4) u[l] = (l & 1) ? W - 1 : 0, v[l] = (l & 2) ? H - 1 : 0;  // the corners
+      }
+      t.pixels(BI::load_aligned(u), BI::load_aligned(v)).store_aligned(got);
+      for (std::size_t l = 0; l < L; ++l) {
+        mismatches += got[l] != (m(u[l], v[l]) != 0 ? 1 : 0);
+        foreground += got[l];
+      }
+    }
+    CHECK(foreground > 100);
+    CHECK(mismatches == 0);
+  }
+}

@@ -444,7 +444,7 @@ class BoundaryRefinement {
   bool gate_can_open(std::size_t k, std::size_t remaining) const {
     const double o = static_cast<double>(n_ovf_[k]) + static_cast<double>(remaining);
     const double v = static_cast<double>(n_vis_[k]) + static_cast<double>(remaining);
-    return !(v > 0.0) || o / v >= static_cast<double>(params_.rho) - 1e-6;
+    return o >= (static_cast<double>(params_.rho) - 1e-6) * v;  // o / v >= rho - 1e-6, or v = 0 (then o = 0)
   }
 
   // Slot k's observation in view `view` enters its counts and minima (B.3).
@@ -503,15 +503,29 @@ class BoundaryRefinement {
         }
         // observe_gaussian, simd::width slots at a time (kBox is a whole number of batches).
         AbrBatch g;
+        alignas(64) std::int32_t centre[simd::width], outside[simd::width];
+        const bool batch_tests = tiles && 1.f >= p.projection.alpha_min;
         for (std::size_t j = j0; j < j1; j += simd::width) {
           const std::size_t lanes = std::min(simd::width, j1 - j);
           bool wanted = false;
           for (std::size_t l = 0; l < lanes && !wanted; ++l) wanted = want(j + l);
           if (!wanted) continue;
           geometry(C, j, g);
+          // With the tiles: every lane's centre and endpoint lookups at once, from the packed
+          // bits. A lane whose centre is eligible and whose endpoints all lie on foreground is
+          // observe_lane's "eligible, no overflow" without tracing.
+          if (batch_tests) lane_tests(g, centre, outside);
           for (std::size_t l = 0; l < lanes; ++l) {
             const std::size_t k = j + l;
-            if (!want(k) || !(g.front[l] > 0.f) || !mask_at(mask, g.mx[l], g.my[l])) continue;  // B.1, rule (e)
+            if (batch_tests) {
+              if (!centre[l] || !want(k)) continue;  // B.1, rule (e)
+              if (!outside[l]) {
+                apply(k, inside);
+                continue;
+              }
+            } else if (!want(k) || !(g.front[l] > 0.f) || !mask_at(mask, g.mx[l], g.my[l])) {
+              continue;  // B.1, rule (e)
+            }
             const Eigen::Vector3f s(s_[0][k], s_[1][k], s_[2][k]);
             const std::array<float, 3> beat = factors ? std::array<float, 3>{f_[0][k], f_[1][k], f_[2][k]} : no_factors;
             const AbrObservation obs = observe_lane(mask, g, l, s, p, &beat);
@@ -520,6 +534,29 @@ class BoundaryRefinement {
         }
       }
     });
+  }
+
+  // Per lane of g, from tiles_ (the current mask's bits): centre[l] = 1 when the centre lies
+  // between the planes, inside the image, on foreground, and Sigma2D is not degenerate (B.1,
+  // rule (e): observe_lane's eligibility); outside[l] = 1 when some 3-sigma endpoint (Eq. 9) lies
+  // outside the image or on background (B.1). The same answers as mask_at / mask_at_branchless
+  // on the mask, lane by lane.
+  void lane_tests(const AbrBatch& g, std::int32_t* centre, std::int32_t* outside) const {
+    using BF = simd::batch<float>;
+    using BI = simd::batch<std::int32_t>;
+    const BF zero(0.f), w(static_cast<float>(tiles_.width())), h(static_cast<float>(tiles_.height()));
+    auto foreground = [&](const float* u, const float* v) {  // 1 / 0 per lane
+      const BF U = BF::load_aligned(u), V = BF::load_aligned(v);
+      const auto in = (U >= zero) & (V >= zero) & (U < w) & (V < h);  // NaN: false
+      const BI iu = simd::to_int(simd::select(in, U, zero)), iv = simd::to_int(simd::select(in, V, zero));
+      return tiles_.pixels(iu, iv) & simd::to_int(simd::select(in, BF(1.f), zero));
+    };
+    const BI ok = simd::to_int(simd::select((BF::load_aligned(g.front) > zero) & (BF::load_aligned(g.det) > zero),
+                                            BF(1.f), zero));
+    (foreground(g.mx, g.my) & ok).store_aligned(centre);
+    BI all = foreground(g.ex[0], g.ey[0]);
+    for (int k = 1; k < 4; ++k) all = all & foreground(g.ex[k], g.ey[k]);
+    (BI(1) - all).store_aligned(outside);
   }
 
   // abr_geometry of slots [j, j + simd::width) in the view C.

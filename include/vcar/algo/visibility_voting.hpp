@@ -145,11 +145,6 @@ inline void vote_chunks(const ChunkedMeans& cm, std::size_t c0, std::size_t c1, 
           const BI sv = p.vis * sign;
           std::int32_t* av = acc + (i0 - j0);
           (BI::load_aligned(av) + sv).store_aligned(av);
-          // Pixel (u, v) is bit (v % 8) * 8 + u % 8 of tile word (v / 8) * tiles_x + u / 8
-          // (MaskTiles), i.e. bit ((v % 4) * 8 + u % 8) of its 32-bit half (v % 8) / 4.
-          const BI tile_row = (p.iv >> 3) * BI(tiles[w.tiles_offset].tiles_x());
-          const BI word_index = ((tile_row + (p.iu >> 3)) << 1) + ((p.iv >> 2) & BI(1));
-          const BI shift = ((p.iv & BI(3)) << 3) + (p.iu & BI(7));
           for (std::size_t k = o0; k < k1; ++k) {
             if (content[k] == MaskTiles::background) continue;
             std::int32_t* af = acc + (1 + k - o0) * C + (i0 - j0);
@@ -157,8 +152,7 @@ inline void vote_chunks(const ChunkedMeans& cm, std::size_t c0, std::size_t c1, 
               (BI::load_aligned(af) + sv).store_aligned(af);
               continue;
             }
-            const auto* words = reinterpret_cast<const std::int32_t*>(tiles[w.tiles_offset + k].words());
-            const BI f = ((simd::gather(words, word_index) >> shift) & BI(1)) * sv;
+            const BI f = tiles[w.tiles_offset + k].pixels(p.iu, p.iv) * sv;
             (BI::load_aligned(af) + f).store_aligned(af);
           }
         }

@@ -69,7 +69,18 @@ public:
     summarise();
   }
 
+  int width() const noexcept { return width_; }
+  int height() const noexcept { return height_; }
   int tiles_x() const noexcept { return tw_; }
+  // Per lane, 1 where pixel (iu, iv) is foreground, else 0; every pixel inside the image. Pixel
+  // (x, y) is bit (y % 8) * 8 + x % 8 of tile word (y / 8) * tiles_x + x / 8, i.e. bit
+  // (y % 4) * 8 + x % 8 of its 32-bit half (y % 8) / 4: one 32-bit gather per batch.
+  simd::batch<std::int32_t> pixels(const simd::batch<std::int32_t>& iu, const simd::batch<std::int32_t>& iv) const {
+    using BI = simd::batch<std::int32_t>;
+    const BI word_index = ((((iv >> 3) * BI(tw_)) + (iu >> 3)) << 1) + ((iv >> 2) & BI(1));
+    const BI shift = ((iv & BI(3)) << 3) + (iu & BI(7));
+    return (simd::gather(reinterpret_cast<const std::int32_t*>(words_.data()), word_index) >> shift) & BI(1);
+  }
   // The tile words (see the top of the file), tiles_x() x ceil(height / 8).
   const std::uint64_t* words() const noexcept { return words_.data(); }
 
