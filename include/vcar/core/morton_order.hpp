@@ -6,7 +6,10 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <utility>
 #include <vector>
+
+#include "vcar/core/parallel.hpp"
 
 namespace vcar {
 
@@ -14,15 +17,33 @@ namespace vcar {
 // their position in the points' bounding box, 10 bits per axis; ties keep their position order,
 // so the order is deterministic. Non-finite coordinates count as the box's low corner.
 inline std::vector<std::uint32_t> morton_order(const float* x, const float* y, const float* z, std::size_t n) {
+  // Fixed blocks of points (not of threads): every step below gives the same result for any
+  // thread count. Each block finds its bounds, computes its keys, counts its digits and
+  // scatters them at offsets taken in block order (a stable radix pass).
+  constexpr std::size_t block = std::size_t{1} << 16;
+  const auto blocks = static_cast<std::int64_t>((n + block - 1) / block);
+  auto range = [&](std::int64_t b) {
+    return std::pair{static_cast<std::size_t>(b) * block, std::min(n, static_cast<std::size_t>(b + 1) * block)};
+  };
   const float* c[3] = {x, y, z};
+  std::vector<std::array<float, 6>> bounds(static_cast<std::size_t>(blocks));
+  parallel_for(blocks, [&](std::int64_t b) {
+    const auto [k0, k1] = range(b);
+    for (int d = 0; d < 3; ++d) {
+      float lo = std::numeric_limits<float>::max(), hi = -lo;
+      for (std::size_t k = k0; k < k1; ++k) {
+        lo = std::min(lo, c[d][k]);  // NaN compares false: ignored
+        hi = std::max(hi, c[d][k]);
+      }
+      bounds[static_cast<std::size_t>(b)][d] = lo;
+      bounds[static_cast<std::size_t>(b)][3 + d] = hi;
+    }
+  });
   std::array<float, 3> lo{}, hi{};
   for (int d = 0; d < 3; ++d) {
     lo[d] = std::numeric_limits<float>::max();
     hi[d] = -lo[d];
-    for (std::size_t k = 0; k < n; ++k) {
-      lo[d] = std::min(lo[d], c[d][k]);  // NaN compares false: ignored
-      hi[d] = std::max(hi[d], c[d][k]);
-    }
+    for (const auto& bb : bounds) lo[d] = std::min(lo[d], bb[d]), hi[d] = std::max(hi[d], bb[3 + d]);
   }
   auto spread = [](std::uint32_t v) {  // 10 bits -> every third bit
     v = (v | (v << 16)) & 0x030000FFu;
@@ -33,27 +54,48 @@ inline std::vector<std::uint32_t> morton_order(const float* x, const float* y, c
   };
   // Keys (code << 32 | position): sorting them by their upper 30 bits keeps ties in position order.
   std::vector<std::uint64_t> key(n), tmp(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    std::uint32_t m = 0;
-    for (int d = 0; d < 3; ++d) {
-      const float ext = hi[d] - lo[d];
-      const float t = ext > 0.f ? (c[d][k] - lo[d]) / ext * 1024.f : 0.f;
-      const float q = t >= 0.f ? std::min(1023.f, t) : 0.f;  // NaN -> 0
-      m |= spread(static_cast<std::uint32_t>(q)) << d;
+  parallel_for(blocks, [&](std::int64_t b) {
+    const auto [k0, k1] = range(b);
+    for (std::size_t k = k0; k < k1; ++k) {
+      std::uint32_t m = 0;
+      for (int d = 0; d < 3; ++d) {
+        const float ext = hi[d] - lo[d];
+        const float t = ext > 0.f ? (c[d][k] - lo[d]) / ext * 1024.f : 0.f;
+        const float q = t >= 0.f ? std::min(1023.f, t) : 0.f;  // NaN -> 0
+        m |= spread(static_cast<std::uint32_t>(q)) << d;
+      }
+      key[k] = (static_cast<std::uint64_t>(m) << 32) | k;
     }
-    key[k] = (static_cast<std::uint64_t>(m) << 32) | k;
-  }
+  });
   // LSD radix sort on the code, 3 stable passes of 10 bits.
+  std::vector<std::array<std::size_t, 1024>> start(static_cast<std::size_t>(blocks));
   for (int pass = 0; pass < 3; ++pass) {
     const int shift = 32 + 10 * pass;
-    std::array<std::size_t, 1025> start{};
-    for (std::size_t k = 0; k < n; ++k) ++start[((key[k] >> shift) & 1023u) + 1];
-    for (std::size_t b = 1; b < start.size(); ++b) start[b] += start[b - 1];
-    for (std::size_t k = 0; k < n; ++k) tmp[start[(key[k] >> shift) & 1023u]++] = key[k];
+    parallel_for(blocks, [&](std::int64_t b) {  // each block's digit counts
+      const auto [k0, k1] = range(b);
+      auto& s = start[static_cast<std::size_t>(b)];
+      s.fill(0);
+      for (std::size_t k = k0; k < k1; ++k) ++s[(key[k] >> shift) & 1023u];
+    });
+    std::size_t at = 0;  // digit-major, then block order: the blocks' offsets
+    for (std::size_t digit = 0; digit < 1024; ++digit)
+      for (auto& s : start) {
+        const std::size_t count = s[digit];
+        s[digit] = at;
+        at += count;
+      }
+    parallel_for(blocks, [&](std::int64_t b) {
+      const auto [k0, k1] = range(b);
+      auto& s = start[static_cast<std::size_t>(b)];
+      for (std::size_t k = k0; k < k1; ++k) tmp[s[(key[k] >> shift) & 1023u]++] = key[k];
+    });
     key.swap(tmp);
   }
   std::vector<std::uint32_t> order(n);
-  for (std::size_t k = 0; k < n; ++k) order[k] = static_cast<std::uint32_t>(key[k]);
+  parallel_for(blocks, [&](std::int64_t b) {
+    const auto [k0, k1] = range(b);
+    for (std::size_t k = k0; k < k1; ++k) order[k] = static_cast<std::uint32_t>(key[k]);
+  });
   return order;
 }
 
