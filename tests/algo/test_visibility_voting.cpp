@@ -179,6 +179,37 @@ TEST_CASE("a candidate subset votes like the full scene at those indices") {
   for (std::size_t k = 0; k < subset.size(); ++k) CHECK(moved.visible(k) == all.visible(subset[k]));
 }
 
+TEST_CASE("selected with ratios: ascending scene indices, each with its Eq. 3 ratio") {
+  // Candidates out of order, scene indices past 2^11 (two of the sort's 11-bit passes).
+  const auto scene = random_scene(4000, 13);
+  const auto cams = ring_cameras(6);
+  std::mt19937 rng(8);
+  std::vector<Mask> masks;
+  for (const auto& c : cams) masks.push_back(random_mask(c.width, c.height, rng));
+  std::vector<Index> subset(4000);
+  for (std::size_t k = 0; k < subset.size(); ++k) subset[k] = static_cast<Index>((k * 3761) % 4000);  // a permutation
+  std::vector<Index> first_half(subset.begin(), subset.begin() + 2000);
+  for (const auto& cand : {subset, first_half}) {
+    vcar::VisibilityVoting v(scene, cand);
+    for (std::size_t j = 0; j < cams.size(); ++j) v.add_view(cams[j], &masks[j]);
+    for (float tau : {0.f, 0.4f, 0.75f, 2.f}) {
+      std::vector<Index> idx;
+      std::vector<float> ratios;
+      v.selected(tau, idx, ratios);
+      std::vector<Index> want;  // brute force: every candidate's ratio against tau
+      for (Index i : cand)
+        if (v.ratio_of(i) >= tau) want.push_back(i);
+      std::sort(want.begin(), want.end());
+      CHECK(idx == want);
+      CHECK(v.selected(tau) == want);
+      REQUIRE(ratios.size() == idx.size());
+      int wrong = 0;
+      for (std::size_t k = 0; k < idx.size(); ++k) wrong += ratios[k] != v.ratio_of(idx[k]) || !(ratios[k] >= tau);
+      CHECK(wrong == 0);
+    }
+  }
+}
+
 TEST_CASE("MultiObjectVoting equals K single votes") {
   const auto scene = random_scene(2000, 13);
   const auto cams = ring_cameras(9);

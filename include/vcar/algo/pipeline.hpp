@@ -213,9 +213,7 @@ public:
   // Eq. 3 (paper) or Eq. R2-R6 (robust): ascending scene indices and their scores.
   void selected(float tau, std::vector<Index>& indices, std::vector<float>& scores) const {
     if (robust_) return robust_->selected(tau, undecided_kept_, keep_unseen_, indices, scores);
-    indices = paper_->selected(tau);
-    scores.clear();
-    for (Index i : indices) scores.push_back(paper_->ratio_of(i));
+    paper_->selected(tau, indices, scores);
   }
   // The same with Eq. R7 choosing between tau and tau_strict (> tau; else tau); returns the
   // threshold applied.

@@ -95,7 +95,8 @@ public:
     diag.n_scene = scene_->size();
     diag.masks_missing = cameras_.size() - vote_.views();
     auto tv = detail::Clock::now();
-    std::vector<Index> selected = vote_.selected(params_.tau_coarse);  // Eq. 3
+    std::vector<Index> selected;
+    vote_.selected(params_.tau_coarse, selected, result.scores);  // Eq. 3
     diag.timings_s.emplace_back("coarse_voting", detail::seconds_since(tv));
     diag.n_coarse = diag.n_fine = diag.n_final = selected.size();
     if (selected.empty()) {
@@ -109,8 +110,6 @@ public:
                     " degrees: vcar::segment would add sampled views (SSS), re-selection does not";
     }
     result.log_scale = refine(selected, diag);
-    result.scores.reserve(selected.size());
-    for (Index i : selected) result.scores.push_back(vote_.ratio_of(i));
     result.indices = std::move(selected);
     diag.timings_s.emplace_back("total", detail::seconds_since(t0));
     return result;

@@ -38,6 +38,7 @@
 #include "vcar/core/mask_tiles.hpp"
 #include "vcar/core/morton_order.hpp"
 #include "vcar/core/parallel.hpp"
+#include "vcar/core/radix_sort.hpp"
 
 namespace vcar {
 
@@ -289,12 +290,32 @@ public:
   }
   // Scene indices (ascending) of the candidates with R >= tau for object o.
   std::vector<Index> selected(int o, float tau) const {
-    flush();
     std::vector<Index> out;
-    for (std::size_t j = 0; j < n_; ++j)
-      if (ratio_at(o, j) >= tau) out.push_back(candidate(means_.order[j]));
-    std::sort(out.begin(), out.end());
+    std::vector<float> ratios;
+    selected(o, tau, out, ratios);
     return out;
+  }
+  // The same with each one's R (Eq. 3), aligned: one pass over the counters in sorted order,
+  // then a radix sort of (scene index, R) by index.
+  void selected(int o, float tau, std::vector<Index>& indices, std::vector<float>& ratios) const {
+    flush();
+    std::vector<std::uint64_t> picked;  // scene index << 32 | bits of R
+    Index largest = 0;
+    for (std::size_t j = 0; j < n_; ++j) {
+      const float r = ratio_at(o, j);
+      if (!(r >= tau)) continue;
+      const Index i = candidate(means_.order[j]);
+      largest = std::max(largest, i);
+      picked.push_back(static_cast<std::uint64_t>(i) << 32 | std::bit_cast<std::uint32_t>(r));
+    }
+    std::vector<std::uint64_t> tmp;
+    sort_by_upper_word(picked, tmp, largest);
+    indices.resize(picked.size());
+    ratios.resize(picked.size());
+    for (std::size_t k = 0; k < picked.size(); ++k) {
+      indices[k] = static_cast<Index>(picked[k] >> 32);
+      ratios[k] = std::bit_cast<float>(static_cast<std::uint32_t>(picked[k]));
+    }
   }
 
   // Bytes held: counters, sorted means and order, packed masks with their tile summaries.
@@ -395,6 +416,10 @@ public:
   float ratio_of(Index scene_index) const { return v_.ratio_of(0, scene_index); }  // Eq. 3 by scene index
   std::vector<std::uint8_t> labels(float tau) const { return v_.labels(0, tau); }  // Eq. 3
   std::vector<Index> selected(float tau) const { return v_.selected(0, tau); }
+  // The same with each one's R (Eq. 3), aligned.
+  void selected(float tau, std::vector<Index>& indices, std::vector<float>& ratios) const {
+    v_.selected(0, tau, indices, ratios);
+  }
   // Tuning knobs of the underlying accumulator (block size, chunk).
   MultiObjectVoting& accumulator() noexcept { return v_; }
 
