@@ -131,9 +131,12 @@ inline int last_sample_that_can_beat(float beat, float lambda, const std::array<
 // `beat` (optional): the candidate's running minimum per axis, clamped below at f_min (see
 // BoundaryRefinement). An endpoint whose factor, clamped, cannot be below beat[d*] is not
 // traced (its f stays +inf): the clamped minimum over views is the same, the march shorter or
-// none. Without it every overflowing endpoint is traced in full.
-[[gnu::always_inline]] inline AbrObservation observe_lane(const Mask& mask, const AbrBatch& g, std::size_t l, const Eigen::Vector3f& s,
-                                   const AbrParams& p, const std::array<float, 3>* beat = nullptr) {
+// none. Without it every overflowing endpoint is traced in full. `march`: the mask the march
+// reads, the Mask itself or its MaskTiles (the same answers).
+template <class MarchMask>
+[[gnu::always_inline]] inline AbrObservation observe_lane(const Mask& mask, const MarchMask& march, const AbrBatch& g,
+                                                          std::size_t l, const Eigen::Vector3f& s, const AbrParams& p,
+                                                          const std::array<float, 3>* beat = nullptr) {
   AbrObservation obs;
   if (!(g.det[l] > 0.f) || !(1.f >= p.projection.alpha_min)) return obs;  // degenerate: rule (e)
   obs.eligible = true;
@@ -161,11 +164,11 @@ inline int last_sample_that_can_beat(float beat, float lambda, const std::array<
       if (!(c > p.f_min)) continue;
       const int last = last_sample_that_can_beat(c, lambda, w, d_star, step, p.boundary_samples, p);
       if (last < 0) continue;
-      const int k = first_exit_sample(mask, m, u, step, last);  // B.3
+      const int k = first_exit_sample(march, m, u, step, last);  // B.3
       if (k > last && last < p.boundary_samples - 1) continue;  // no exit within reach
       if (k <= last) l_u = exit_distance(k, step);
     } else {
-      l_u = boundary_distance(mask, m, u, L, p.boundary_samples);  // B.3
+      l_u = boundary_distance(march, m, u, L, p.boundary_samples);  // B.3
     }
     const float f = compression_factor(l_u, lambda, w, d_star, p);  // Eq. 13
     obs.f[d_star] = std::min(obs.f[d_star], f);
@@ -191,7 +194,7 @@ inline AbrObservation observe_gaussian(const Camera& cam, const Mask& mask, cons
   AbrBatch g;
   abr_geometry(AbrCamera::from(cam, p.projection), col[0], col[1], col[2], rot, sc, p.sigma_c, g);
   if (!(g.front[0] > 0.f) || !mask_at(mask, g.mx[0], g.my[0])) return {};  // B.1, rule (e)
-  return observe_lane(mask, g, 0, s, p);
+  return observe_lane(mask, mask, g, 0, s, p);
 }
 
 class BoundaryRefinement {
@@ -528,7 +531,8 @@ class BoundaryRefinement {
             }
             const Eigen::Vector3f s(s_[0][k], s_[1][k], s_[2][k]);
             const std::array<float, 3> beat = factors ? std::array<float, 3>{f_[0][k], f_[1][k], f_[2][k]} : no_factors;
-            const AbrObservation obs = observe_lane(mask, g, l, s, p, &beat);
+            const AbrObservation obs = tiles ? observe_lane(mask, tiles_, g, l, s, p, &beat)
+                                             : observe_lane(mask, mask, g, l, s, p, &beat);
             if (obs.eligible) apply(k, obs);
           }
         }
