@@ -74,12 +74,11 @@ int main(int argc, char** argv) {
   vcar::cpu::TiledRenderer renderer;
   vcar::VcarParams params = vcar::VcarParams::nvos();
   params.enable_sss = false;
-  auto segmenter = vcar::make_segmenter([&](const vcar::FrameSequence& f, const vcar::Prompt&) {
-    std::vector<std::optional<vcar::Mask>> out(f.size());
-    for (std::size_t k = 0; k < f.size(); ++k)  // frame k -> training view (reference first)
-      out[k] = masks[k];
-    return out;
-  });
+  // The masks are in hand: the segmenter hands out pointers to them (no copy).
+  auto segmenter = vcar::make_streaming_segmenter(
+      [&](const vcar::FrameSequence& f, const vcar::Prompt&, const vcar::MaskSink& sink) {
+        for (std::size_t k = 0; k < f.size(); ++k) sink(k, &masks[k]);  // frame k -> training view (reference first)
+      });
 
   std::printf("%-46s %8s %10s\n", "", "threads", "median s");
   vcar::SegmentationResult ref;
