@@ -121,3 +121,28 @@ TEST_CASE("MaskTiles::pixels: a batch of lookups equals the mask's bytes") {
     CHECK(mismatches == 0);
   }
 }
+
+TEST_CASE("mask_at on tiles for a batch of points equals mask_at on the mask, outside and NaN included") {
+  using BF = vcar::simd::batch<float>;
+  constexpr std::size_t L = BF::size;
+  std::mt19937 rng(10);
+  std::uniform_real_distribution<float> U(-3.f, 40.f);
+  Mask m(37, 29, 1, 0);
+  for (auto& v : m.data) v = rng() % 2 ? 255 : 0;
+  MaskTiles t;
+  t.build(m);
+  int mismatches = 0, inside_fg = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    alignas(64) float u[L], v[L];
+    alignas(64) std::int32_t got[L];
+    for (std::size_t l = 0; l < L; ++l) u[l] = U(rng), v[l] = U(rng);
+    if (trial == 0) u[0] = NAN, v[1] = NAN, u[2] = 37.f, v[3] = 28.999f;  // NaN, the right edge, just inside
+    vcar::mask_at(t, BF::load_aligned(u), BF::load_aligned(v)).store_aligned(got);
+    for (std::size_t l = 0; l < L; ++l) {
+      mismatches += got[l] != (vcar::mask_at(m, u[l], v[l]) ? 1 : 0);
+      inside_fg += got[l];
+    }
+  }
+  CHECK(inside_fg > 100);
+  CHECK(mismatches == 0);
+}

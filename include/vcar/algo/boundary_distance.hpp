@@ -24,14 +24,8 @@ inline int first_outside(const Mask& mask, const simd::batch<float>& x, const si
   return -1;
 }
 inline int first_outside(const MaskTiles& tiles, const simd::batch<float>& x, const simd::batch<float>& y, int n) {
-  using B = simd::batch<float>;
-  const B zero(0.f);
-  const auto in = (x >= zero) & (y >= zero) & (x < B(static_cast<float>(tiles.width()))) &
-                  (y < B(static_cast<float>(tiles.height())));  // NaN: false
-  const auto fg = tiles.pixels(simd::to_int(simd::select(in, x, zero)), simd::to_int(simd::select(in, y, zero))) &
-                  simd::to_int(simd::select(in, B(1.f), zero));
   alignas(64) std::int32_t f[simd::width];
-  fg.store_aligned(f);
+  mask_at(tiles, x, y).store_aligned(f);
   for (int l = 0; l < n; ++l)
     if (!f[l]) return l;
   return -1;

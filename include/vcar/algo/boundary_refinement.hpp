@@ -548,13 +548,8 @@ class BoundaryRefinement {
   void lane_tests(const AbrBatch& g, std::int32_t* centre, std::int32_t* outside) const {
     using BF = simd::batch<float>;
     using BI = simd::batch<std::int32_t>;
-    const BF zero(0.f), w(static_cast<float>(tiles_.width())), h(static_cast<float>(tiles_.height()));
-    auto foreground = [&](const float* u, const float* v) {  // 1 / 0 per lane
-      const BF U = BF::load_aligned(u), V = BF::load_aligned(v);
-      const auto in = (U >= zero) & (V >= zero) & (U < w) & (V < h);  // NaN: false
-      const BI iu = simd::to_int(simd::select(in, U, zero)), iv = simd::to_int(simd::select(in, V, zero));
-      return tiles_.pixels(iu, iv) & simd::to_int(simd::select(in, BF(1.f), zero));
-    };
+    const BF zero(0.f);
+    auto foreground = [&](const float* u, const float* v) { return mask_at(tiles_, BF::load_aligned(u), BF::load_aligned(v)); };
     const BI ok = simd::to_int(simd::select((BF::load_aligned(g.front) > zero) & (BF::load_aligned(g.det) > zero),
                                             BF(1.f), zero));
     (foreground(g.mx, g.my) & ok).store_aligned(centre);

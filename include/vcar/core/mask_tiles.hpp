@@ -136,4 +136,15 @@ private:
   std::vector<std::uint32_t> any_, all_;   // integral counts over the tile grid
 };
 
+// mask_at (core/image.hpp) for a batch of points: per lane 1 where (u, v) lies inside the image
+// on a foreground pixel (floor), else 0 (NaN: 0).
+inline simd::batch<std::int32_t> mask_at(const MaskTiles& t, const simd::batch<float>& u, const simd::batch<float>& v) {
+  using B = simd::batch<float>;
+  const B zero(0.f);
+  const auto in = (u >= zero) & (v >= zero) & (u < B(static_cast<float>(t.width()))) &
+                  (v < B(static_cast<float>(t.height())));
+  return t.pixels(simd::to_int(simd::select(in, u, zero)), simd::to_int(simd::select(in, v, zero))) &
+         simd::to_int(simd::select(in, B(1.f), zero));
+}
+
 }  // namespace vcar
