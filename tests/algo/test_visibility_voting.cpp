@@ -180,7 +180,7 @@ TEST_CASE("a candidate subset votes like the full scene at those indices") {
 }
 
 TEST_CASE("selected with ratios: ascending scene indices, each with its Eq. 3 ratio") {
-  // Candidates out of order, scene indices past 2^11 (two of the sort's 11-bit passes).
+  // Candidates out of order, scene indices past 2^10 (two of the sort's 10-bit passes).
   const auto scene = random_scene(4000, 13);
   const auto cams = ring_cameras(6);
   std::mt19937 rng(8);

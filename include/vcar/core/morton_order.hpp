@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "vcar/core/parallel.hpp"
+#include "vcar/core/radix_sort.hpp"
 
 namespace vcar {
 
@@ -18,8 +19,7 @@ namespace vcar {
 // so the order is deterministic. Non-finite coordinates count as the box's low corner.
 inline std::vector<std::uint32_t> morton_order(const float* x, const float* y, const float* z, std::size_t n) {
   // Fixed blocks of points (not of threads): every step below gives the same result for any
-  // thread count. Each block finds its bounds, computes its keys, counts its digits and
-  // scatters them at offsets taken in block order (a stable radix pass).
+  // thread count. Each block finds its bounds and computes its keys; the sort is blocked too.
   constexpr std::size_t block = std::size_t{1} << 16;
   const auto blocks = static_cast<std::int64_t>((n + block - 1) / block);
   auto range = [&](std::int64_t b) {
@@ -53,7 +53,7 @@ inline std::vector<std::uint32_t> morton_order(const float* x, const float* y, c
     return v;
   };
   // Keys (code << 32 | position): sorting them by their upper 30 bits keeps ties in position order.
-  std::vector<std::uint64_t> key(n), tmp(n);
+  std::vector<std::uint64_t> key(n), tmp;
   parallel_for(blocks, [&](std::int64_t b) {
     const auto [k0, k1] = range(b);
     for (std::size_t k = k0; k < k1; ++k) {
@@ -67,30 +67,7 @@ inline std::vector<std::uint32_t> morton_order(const float* x, const float* y, c
       key[k] = (static_cast<std::uint64_t>(m) << 32) | k;
     }
   });
-  // LSD radix sort on the code, 3 stable passes of 10 bits.
-  std::vector<std::array<std::size_t, 1024>> start(static_cast<std::size_t>(blocks));
-  for (int pass = 0; pass < 3; ++pass) {
-    const int shift = 32 + 10 * pass;
-    parallel_for(blocks, [&](std::int64_t b) {  // each block's digit counts
-      const auto [k0, k1] = range(b);
-      auto& s = start[static_cast<std::size_t>(b)];
-      s.fill(0);
-      for (std::size_t k = k0; k < k1; ++k) ++s[(key[k] >> shift) & 1023u];
-    });
-    std::size_t at = 0;  // digit-major, then block order: the blocks' offsets
-    for (std::size_t digit = 0; digit < 1024; ++digit)
-      for (auto& s : start) {
-        const std::size_t count = s[digit];
-        s[digit] = at;
-        at += count;
-      }
-    parallel_for(blocks, [&](std::int64_t b) {
-      const auto [k0, k1] = range(b);
-      auto& s = start[static_cast<std::size_t>(b)];
-      for (std::size_t k = k0; k < k1; ++k) tmp[s[(key[k] >> shift) & 1023u]++] = key[k];
-    });
-    key.swap(tmp);
-  }
+  sort_by_upper_word(key, tmp, (1u << 30) - 1);  // stable by the 30-bit code
   std::vector<std::uint32_t> order(n);
   parallel_for(blocks, [&](std::int64_t b) {
     const auto [k0, k1] = range(b);
