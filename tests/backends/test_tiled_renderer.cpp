@@ -19,8 +19,11 @@ namespace {
 using vcar::Index;
 
 // Brute force: every pixel against every drawn Gaussian, no tiles, double precision, the
-// compositing rules of conventions §3. Projections come from vcar::project_gaussian (tested
-// on its own in tests/core/test_projection.cpp).
+// compositing rules of conventions §3. Projections come from the renderer's batch projection,
+// one Gaussian at a time (tests/backends/test_batch_projection.cpp checks it against
+// vcar::project_gaussian): a last-bit difference there can flip a pixel's stop test (T <= 1e-4)
+// and move its depth by up to 1e-4 z, more than this test's bounds, so this test checks the
+// culling, binning and compositing of the same splats.
 struct BruteForce {
   std::vector<double> rgb, alpha, depth;  // W*H*3, W*H, W*H
   std::vector<double> weight, weight_fg;  // per scene index
@@ -32,15 +35,22 @@ BruteForce brute_force(const vcar::RenderRequest& q, const vcar::Mask* mask = nu
   const std::size_t n = q.subset ? q.subset->size() : sc.size();
   struct G { double mx, my, a, b, c, op, z, r, g, bl; std::size_t i, k; };
   std::vector<G> gs;
+  const vcar::cpu::BatchCamera bc(cam, vcar::ProjectionParams{});
   for (std::size_t k = 0; k < n; ++k) {
     const std::size_t i = q.subset ? (*q.subset)[k] : k;
-    Eigen::Vector3f s;
-    for (int d = 0; d < 3; ++d) s[d] = std::exp(q.log_scale ? (*q.log_scale)[d][k] : sc.log_scale[d][i]);
-    const auto p = vcar::project_gaussian(cam, sc.mu(i), sc.R(i), s, sc.opacity(i));
-    if (!p.valid || !p.on_screen) continue;
+    vcar::cpu::GaussianBatch g;  // Gaussian i in every lane
+    for (int d = 0; d < 3; ++d) {
+      g.mu[d] = vcar::cpu::Lane(sc.mean[d][i]);
+      g.log_s[d] = vcar::cpu::Lane(q.log_scale ? (*q.log_scale)[d][k] : sc.log_scale[d][i]);
+    }
+    for (int c = 0; c < 4; ++c) g.q[c] = vcar::cpu::Lane(sc.rotation[c][i]);
+    g.logit = vcar::cpu::Lane(sc.opacity_logit[i]);
+    vcar::cpu::PackedSplat p{};
+    std::uint64_t rect = 0;
+    vcar::cpu::project_batch(bc, vcar::ProjectionParams{}, g, static_cast<std::uint32_t>(k), 1, &p, &rect);
+    if (vcar::cpu::rect_empty(rect)) continue;  // culled
     const Eigen::Vector3f c = vcar::gaussian_rgb(sc, i, cam.position());
-    gs.push_back({p.mean.x(), p.mean.y(), p.conic[0], p.conic[1], p.conic[2], sc.opacity(i), p.depth,
-                  c[0], c[1], c[2], i, k});
+    gs.push_back({p.mx, p.my, p.ca, p.cb, p.cc, p.opacity, p.depth, c[0], c[1], c[2], i, k});
   }
   std::sort(gs.begin(), gs.end(), [](const G& a, const G& b) {
     return float(a.z) != float(b.z) ? a.z < b.z : a.k < b.k;

@@ -56,6 +56,22 @@ TEST_CASE("simd: exp within 2 ulp of std::exp over the renderer's range", "[simd
   }
 }
 
+TEST_CASE("simd: log within 2 ulp of std::log; floor and ceil exact (the renderer's projection)", "[simd]") {
+  alignas(64) float x[L], out[L];
+  for (float x0 = 1e-5f; x0 < 1e6f; x0 *= 1.61f) {  // ln(opacity / alpha_min) and beyond
+    for (std::size_t l = 0; l < L; ++l) x[l] = x0 * (1.f + 0.011f * static_cast<float>(l));
+    simd::log(BF::load_aligned(x)).store_aligned(out);
+    for (std::size_t l = 0; l < L; ++l) CHECK(out[l] == Approx(std::log(x[l])).epsilon(2.5e-7).margin(1e-7));
+  }
+  for (float x0 = -70.f; x0 <= 70.f; x0 += 0.73f) {  // tile coordinates, halves and integers included
+    for (std::size_t l = 0; l < L; ++l) x[l] = l % 2 ? std::round(x0) + 0.5f * static_cast<float>(l) : x0 + 0.25f * static_cast<float>(l);
+    simd::floor(BF::load_aligned(x)).store_aligned(out);
+    for (std::size_t l = 0; l < L; ++l) CHECK(out[l] == std::floor(x[l]));
+    simd::ceil(BF::load_aligned(x)).store_aligned(out);
+    for (std::size_t l = 0; l < L; ++l) CHECK(out[l] == std::ceil(x[l]));
+  }
+}
+
 TEST_CASE("simd: sqrt is correctly rounded, as std::sqrt, bit for bit", "[simd]") {
   alignas(64) float x[L], out[L];
   int differing = 0;

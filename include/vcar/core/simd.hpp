@@ -68,6 +68,9 @@ inline batch<float> sqrt(const batch<float>& a) {
   return xsimd::sqrt(a);
 #endif
 }
+inline batch<float> log(const batch<float>& a) { return xsimd::log(a); }
+inline batch<float> floor(const batch<float>& a) { return xsimd::floor(a); }
+inline batch<float> ceil(const batch<float>& a) { return xsimd::ceil(a); }
 template <class T>
 inline batch<T> select(const batch_bool<T>& c, const batch<T>& a, const batch<T>& b) { return xsimd::select(c, a, b); }
 template <class T>
@@ -194,6 +197,9 @@ template <class T>
 inline batch<T> max(const batch<T>& a, const batch<T>& b) { return batch<T>::zip(a, b, [](T x, T y) { return x > y ? x : y; }); }
 inline batch<float> exp(const batch<float>& a) { return batch<float>::map(a, [](float x) { return std::exp(x); }); }
 inline batch<float> sqrt(const batch<float>& a) { return batch<float>::map(a, [](float x) { return std::sqrt(x); }); }
+inline batch<float> log(const batch<float>& a) { return batch<float>::map(a, [](float x) { return std::log(x); }); }
+inline batch<float> floor(const batch<float>& a) { return batch<float>::map(a, [](float x) { return std::floor(x); }); }
+inline batch<float> ceil(const batch<float>& a) { return batch<float>::map(a, [](float x) { return std::ceil(x); }); }
 template <class T>
 inline batch<T> select(const batch_bool<T>& c, const batch<T>& a, const batch<T>& b) {
   batch<T> r;

@@ -13,6 +13,7 @@
 
 #include <Eigen/Core>
 
+#include "vcar/backends/cpu/batch_projection.hpp"
 #include "vcar/backends/cpu/tile_binning.hpp"
 #include "vcar/backends/cpu/tile_compositing.hpp"
 #include "vcar/concepts/renderer.hpp"
@@ -199,40 +200,27 @@ private:
     h = std::min(tile_size, H - y0);
   }
 
-  // Projects every drawn Gaussian (one result per index, any thread count) and bins the tiles.
+  // Projects every drawn Gaussian (one result per index, any thread count), Lane::size at a
+  // time (batch_projection.hpp), and bins the tiles.
   void prepare(const RenderRequest& q) {
     const GaussianScene& sc = *q.scene;
-    const Camera& cam = *q.camera;
     const std::size_t n = q.subset ? q.subset->size() : sc.size();
     splats_.resize(n);
-    const int tiles_x = (cam.width + tile_size - 1) / tile_size;
-    const int tiles_y = (cam.height + tile_size - 1) / tile_size;
     ProjectedSplats& s = splats_;
     const ProjectionParams& pp = opt_.projection;
+    const BatchCamera bc(*q.camera, pp);
+    constexpr int L = static_cast<int>(Lane::size);
     const auto t0 = Clock::now();
     parallel_chunks(static_cast<std::int64_t>(n), 4096, [&](std::int64_t, std::int64_t b, std::int64_t e) {
-      for (std::int64_t k = b; k < e; ++k) {
-        const std::size_t i = scene_index(q, static_cast<std::size_t>(k));
-        Eigen::Vector3f log_s;
-        for (int d = 0; d < 3; ++d) log_s[d] = q.log_scale ? (*q.log_scale)[d][k] : sc.log_scale[d][i];
-        const Eigen::Vector3f mu = sc.mu(i);
-        const float opacity = sc.opacity(i);
-        const ProjectedGaussian g = project_gaussian(cam, mu, sc.R(i), log_s.array().exp().matrix(), opacity, pp);
-        s.rect[k] = 0;
-        if (!g.valid || !g.on_screen) continue;  // culled (gsplat)
-        PackedSplat& ps = s.splat[k];
-        ps = {g.mean.x(), g.mean.y(), static_cast<float>(g.radius_x), static_cast<float>(g.radius_y),
-              g.conic[0], g.conic[1], g.conic[2], std::log(opacity / pp.alpha_min),
-              opacity, g.depth, 0.f, 0.f, 0.f, static_cast<std::uint32_t>(k), 0u};
-        std::int32_t tx0, tx1, ty0, ty1;
-        tile_rect(ps.mx, ps.rx, tiles_x, tx0, tx1);
-        tile_rect(ps.my, ps.ry, tiles_y, ty0, ty1);
-        s.rect[k] = pack_rect(tx0, tx1, ty0, ty1);
+      for (std::int64_t k0 = b; k0 < e; k0 += L) {
+        const int lanes = static_cast<int>(std::min<std::int64_t>(L, e - k0));
+        const GaussianBatch g = load_batch(q, static_cast<std::size_t>(k0), lanes);
+        project_batch(bc, pp, g, static_cast<std::uint32_t>(k0), lanes, s.splat.data() + k0, s.rect.data() + k0);
       }
     });
     const auto t1 = Clock::now();
     times_.project_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
-    bin_tiles(splats_, cam.width, cam.height, bins_);
+    bin_tiles(splats_, q.camera->width, q.camera->height, bins_);
     times_.bin_ms = ms_since(t1);
   }
 
