@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "vcar/core/parallel.hpp"
+#include "vcar/core/radix_sort.hpp"
 
 namespace vcar::cpu {
 
@@ -59,8 +60,8 @@ struct TileBins {
   std::vector<PackedSplat> splat;           // splats that touch a tile, in depth order
   std::vector<std::uint32_t> ids;
   std::vector<std::int64_t> start;          // tiles + 1 offsets
-  std::vector<std::uint32_t> order, tmp;    // splats that touch a tile, by depth (scratch: tmp)
-  std::vector<std::uint32_t> key, key_tmp;  // scratch: depth bits
+  std::vector<std::uint32_t> order;         // splats that touch a tile, by depth
+  std::vector<std::uint64_t> record, record_tmp;  // scratch: depth bits << 32 | drawn index
   std::vector<std::uint64_t> rect;          // scratch: tile rectangles in depth order
   std::vector<std::int64_t> chunk_offset;   // scratch: per (chunk, tile) write cursor
   int tiles() const { return tiles_x * tiles_y; }
@@ -69,49 +70,56 @@ struct TileBins {
 // Fixed number of chunks (independent of the thread count) so binning is deterministic.
 inline constexpr std::int64_t binning_chunks = 64;
 
-// Splats that touch a tile, sorted by camera depth with ties by index: a stable LSD radix sort
-// of the depth bits in three 11-bit digits (depth >= near plane > 0, so the bits order like the
-// floats), the three histograms taken in one pass.
+// Splats that touch a tile, sorted by camera depth with ties by index: records
+// (depth bits << 32 | k), made in fixed blocks (compaction order = k order), then the stable
+// radix sort of core/radix_sort.hpp (depth >= near plane > 0, so the bits order like the floats).
+// The same order for any thread count.
 inline void sort_by_depth(const ProjectedSplats& s, TileBins& bins) {
-  const std::size_t n = s.size();
-  bins.order.resize(n);
-  bins.key.resize(n);
-  std::size_t m = 0;
-  for (std::size_t k = 0; k < n; ++k)
-    if (!rect_empty(s.rect[k])) {
-      bins.order[m] = static_cast<std::uint32_t>(k);
-      bins.key[m++] = std::bit_cast<std::uint32_t>(s.splat[k].depth);
-    }
-  bins.order.resize(m);
-  bins.key.resize(m);
-  bins.tmp.resize(m);
-  bins.key_tmp.resize(m);
-  constexpr int digits = 3, bits = 11, buckets = 1 << bits;
-  std::vector<std::size_t> count(static_cast<std::size_t>(digits) * buckets, 0);
-  for (std::size_t j = 0; j < m; ++j)
-    for (int d = 0; d < digits; ++d) ++count[d * buckets + ((bins.key[j] >> (d * bits)) & (buckets - 1))];
-  for (int d = 0; d < digits; ++d) {
-    std::size_t* c = count.data() + d * buckets;
-    const int shift = d * bits;
-    if (m == 0 || c[(bins.key[0] >> shift) & (buckets - 1)] == m) continue;  // one bucket
-    std::size_t run = 0;
-    for (int b = 0; b < buckets; ++b) run += std::exchange(c[b], run);
-    for (std::size_t j = 0; j < m; ++j) {
-      const std::size_t dst = c[(bins.key[j] >> shift) & (buckets - 1)]++;
-      bins.tmp[dst] = bins.order[j];
-      bins.key_tmp[dst] = bins.key[j];
-    }
-    bins.order.swap(bins.tmp);
-    bins.key.swap(bins.key_tmp);
-  }
+  constexpr std::int64_t block = std::int64_t{1} << 16;
+  const auto n = static_cast<std::int64_t>(s.size());
+  const std::int64_t blocks = (n + block - 1) / block;
+  std::vector<std::int64_t> at(static_cast<std::size_t>(blocks) + 1, 0);
+  std::vector<std::uint32_t> largest(static_cast<std::size_t>(blocks), 0);
+  parallel_for(blocks, [&](std::int64_t b) {  // kept splats and the largest depth bits per block
+    std::int64_t kept = 0;
+    std::uint32_t top = 0;
+    for (std::int64_t k = b * block, e = std::min(n, k + block); k < e; ++k)
+      if (!rect_empty(s.rect[k])) {
+        ++kept;
+        top = std::max(top, std::bit_cast<std::uint32_t>(s.splat[k].depth));
+      }
+    at[b + 1] = kept;
+    largest[b] = top;
+  });
+  for (std::int64_t b = 0; b < blocks; ++b) at[b + 1] += at[b];
+  const auto m = static_cast<std::size_t>(at[blocks]);
+  bins.record.resize(m);
+  parallel_for(blocks, [&](std::int64_t b) {
+    std::uint64_t* out = bins.record.data() + at[b];
+    for (std::int64_t k = b * block, e = std::min(n, k + block); k < e; ++k)
+      if (!rect_empty(s.rect[k]))
+        *out++ = static_cast<std::uint64_t>(std::bit_cast<std::uint32_t>(s.splat[k].depth)) << 32 | static_cast<std::uint64_t>(k);
+  });
+  sort_by_upper_word(bins.record, bins.record_tmp, largest.empty() ? 0u : *std::max_element(largest.begin(), largest.end()));
   // The splats and rectangles in depth order, so later passes read memory in sequence (a
   // tile's list then climbs through memory).
+  bins.order.resize(m);
   bins.rect.resize(m);
   bins.splat.resize(m);
-  parallel_for(static_cast<std::int64_t>(m), [&](std::int64_t j) {
-    const std::uint32_t k = bins.order[j];
-    bins.splat[j] = s.splat[k];
-    bins.rect[j] = s.rect[k];
+  // (a gather from scattered lines: each is asked for `ahead` records before its turn)
+  constexpr std::int64_t ahead = 16;
+  parallel_chunks(static_cast<std::int64_t>(m), 4096, [&](std::int64_t, std::int64_t b, std::int64_t e) {
+    for (std::int64_t j = b; j < e; ++j) {
+      if (j + ahead < e) {
+        const auto a = static_cast<std::uint32_t>(bins.record[j + ahead]);
+        __builtin_prefetch(&s.splat[a]);
+        __builtin_prefetch(&s.rect[a]);
+      }
+      const auto k = static_cast<std::uint32_t>(bins.record[j]);
+      bins.order[j] = k;
+      bins.splat[j] = s.splat[k];
+      bins.rect[j] = s.rect[k];
+    }
   });
 }
 
