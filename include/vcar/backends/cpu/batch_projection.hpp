@@ -19,23 +19,18 @@ namespace vcar::cpu {
 
 // Camera constants of the projection, computed once per call.
 struct BatchCamera {
-  float R[3][3], t[3];                            // world to camera
-  float fx, fy, cx, cy, W, H;                     // intrinsics, image size (px)
-  float lim_x_pos, lim_x_neg, lim_y_pos, lim_y_neg;  // Jacobian clamp on tx/tz, ty/tz
+  float R[3][3], t[3];            // world to camera
+  float fx, fy, cx, cy, W, H;     // intrinsics, image size (px)
+  JacobianLimits lim;             // clamp on tx/tz, ty/tz (B.7, as perspective_jacobian)
   float tiles_x, tiles_y;
 
-  BatchCamera(const Camera& cam, const ProjectionParams& p) {
+  BatchCamera(const Camera& cam, const ProjectionParams& p) : lim(JacobianLimits::of(cam, p.frustum_margin)) {
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 3; ++c) R[r][c] = cam.R_w(r, c);
       t[r] = cam.t_w[r];
     }
     fx = cam.fx, fy = cam.fy, cx = cam.cx, cy = cam.cy;
     W = static_cast<float>(cam.width), H = static_cast<float>(cam.height);
-    const float tan_x = 0.5f * W / fx, tan_y = 0.5f * H / fy;  // as perspective_jacobian
-    lim_x_pos = (W - cx) / fx + p.frustum_margin * tan_x;
-    lim_x_neg = cx / fx + p.frustum_margin * tan_x;
-    lim_y_pos = (H - cy) / fy + p.frustum_margin * tan_y;
-    lim_y_neg = cy / fy + p.frustum_margin * tan_y;
     tiles_x = static_cast<float>((cam.width + tile_size - 1) / tile_size);
     tiles_y = static_cast<float>((cam.height + tile_size - 1) / tile_size);
   }
@@ -100,8 +95,8 @@ inline void project_batch(const BatchCamera& c, const ProjectionParams& p, const
   const Lane u = Lane(c.fx) * t[0] / t[2] + Lane(c.cx), v = Lane(c.fy) * t[1] / t[2] + Lane(c.cy);
   // Perspective Jacobian with tx/tz, ty/tz clamped (Eq. 10), M = J R_w.
   const Lane rz = one / t[2], rz2 = rz * rz;
-  const Lane tx = t[2] * simd::min(Lane(c.lim_x_pos), simd::max(Lane(-c.lim_x_neg), t[0] * rz));
-  const Lane ty = t[2] * simd::min(Lane(c.lim_y_pos), simd::max(Lane(-c.lim_y_neg), t[1] * rz));
+  const Lane tx = t[2] * simd::min(Lane(c.lim.x_pos), simd::max(Lane(-c.lim.x_neg), t[0] * rz));
+  const Lane ty = t[2] * simd::min(Lane(c.lim.y_pos), simd::max(Lane(-c.lim.y_neg), t[1] * rz));
   const Lane j00 = Lane(c.fx) * rz, j02 = -Lane(c.fx) * tx * rz2, j11 = Lane(c.fy) * rz, j12 = -Lane(c.fy) * ty * rz2;
   Lane M[2][3];
   for (int k = 0; k < 3; ++k) {
