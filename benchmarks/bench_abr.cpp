@@ -1,6 +1,7 @@
 // ABR throughput: Gaussian-views per second (projection, overflow test, boundary tracing, factor)
 // for Gaussians near the silhouette of a sphere seen from 20 forward-facing views at 1280 x 720, against a
-// plain scalar single-thread version of the same rules in the same run.
+// plain scalar single-thread version of the same rules in the same run; BoundaryRefinement over
+// every view, and refine_deferred as vcar::segment runs it (expect_views, deferred tracing).
 //   bench_abr [n_gaussians=100000] [views=20] [repeats=5]
 #include <algorithm>
 #include <array>
@@ -151,11 +152,28 @@ void run_scenario(bool limb_band, int n, int views, int repeats) {
     return median(t);
   };
 
+  // As vcar::segment runs it: expect_views and deferred tracing, the flagged candidates left
+  // untraced refined once more (vcar::refine_deferred; the same result).
+  auto run_deferred = [&](int threads, vcar::AbrResult& out) {
+    vcar::set_num_threads(threads);
+    std::vector<double> t;
+    for (int r = 0; r < repeats; ++r) {
+      const auto t0 = std::chrono::steady_clock::now();
+      out = vcar::refine_deferred(scene, cand, p, static_cast<std::size_t>(views), [&](auto&& add) {
+        for (int v = 0; v < views; ++v) add(cams[static_cast<std::size_t>(v)], masks[static_cast<std::size_t>(v)]);
+      });
+      t.push_back(seconds_since(t0));
+    }
+    return median(t);
+  };
+
   const int hw = vcar::max_threads();
-  vcar::AbrResult r1, r2;
+  vcar::AbrResult r1, r2, d1, d2;
   std::size_t vis = 0, ovf = 0;
   const double t1 = run_lib(1, r1, vis, ovf);
   const double t2 = run_lib(std::max(2, hw), r2, vis, ovf);
+  const double td1 = run_deferred(1, d1);
+  const double td2 = run_deferred(std::max(2, hw), d2);
   vcar::set_num_threads(hw);
 
   // Plain scalar version, single thread, same rules.
@@ -197,6 +215,10 @@ void run_scenario(bool limb_band, int n, int views, int repeats) {
               gv / t1, median(cpu1), 1e9 * median(cpu1) / gv);
   std::printf("library %d threads: %8.3f s  %10.3e Gaussian-views/s  (x%.2f vs 1 thread)\n", std::max(2, hw), t2,
               gv / t2, t1 / t2);
+  std::printf("refine_deferred (as vcar::segment), 1 thread: %8.3f s  %10.3e Gaussian-views/s  (x%.2f vs add_view of every view), "
+              "%d threads: %8.3f s  %10.3e Gaussian-views/s  (x%.2f); %zu retraced; same result: %s\n",
+              td1, gv / td1, t1 / td1, std::max(2, hw), td2, gv / td2, t2 / td2, d1.retraced,
+              d1.log_scale == r1.log_scale && d2.log_scale == r1.log_scale && d1.axis_compressed == r1.axis_compressed ? "yes" : "NO");
   std::printf("plain scalar 1 thread: %8.3f s  %10.3e Gaussian-views/s  (CPU %.3f s, %.0f ns per Gaussian-view)\n",
               t_plain, gv / t_plain, median(cpup), 1e9 * median(cpup) / gv);
   std::printf("ratios: library 1 thread / plain = x%.2f, library %d threads / plain = x%.2f\n", t_plain / t1,
@@ -204,7 +226,7 @@ void run_scenario(bool limb_band, int n, int views, int repeats) {
   std::printf("threads agree bit for bit: %s\n", r1.log_scale == r2.log_scale ? "yes" : "NO");
   std::printf("plain vs library: compressed %zu vs %zu, axes differing by > 1e-3 in log s: %zu, max |d log s| %.2e\n",
               plain_compressed, r1.compressed, disagree, max_diff);
-  std::printf("state per candidate: %zu bytes (index, mean, rotation, scales, log-scales, 2 x uint16 counts, 3 minima and the views that set them)\n",
+  std::printf("state per candidate: %zu bytes (index, mean, rotation, scales, log-scales, 2 x uint16 counts, 3 minima and the views that set them, the deferred-tracing mark)\n",
               vcar::BoundaryRefinement::bytes_per_candidate());
 }
 

@@ -546,7 +546,7 @@ nlohmann::json write_segmentation(const std::filesystem::path& out, const Gaussi
                   {"inliers", d.sphere.inliers}}},
       {"sampled_views", d.sampled_cameras.size()},
       {"sampled_positions", sampled},
-      {"abr", {{"flagged", d.abr_flagged}, {"compressed", d.abr_compressed}, {"masks_widened", d.abr_masks_widened}}},
+      {"abr", {{"flagged", d.abr_flagged}, {"compressed", d.abr_compressed}, {"retraced", d.abr_retraced}, {"masks_widened", d.abr_masks_widened}}},
       {"masks_missing", d.masks_missing},
       {"note", d.note},
       {"timings_s", timings},

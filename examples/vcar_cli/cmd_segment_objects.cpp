@@ -238,7 +238,7 @@ int run_segment_objects(const SegmentOptions& o, const GlobalOptions& g) {
                            {"valid_cameras", d.valid_cameras}, {"max_gap_deg", d.max_gap_deg}, {"sss_triggered", d.sss_triggered},
                            {"tau_fine_applied", d.tau_fine_applied}, {"tau_coarse_applied", d.tau_coarse_applied},
                            {"sampled_views", d.sampled_cameras.size()},
-                           {"abr", {{"flagged", d.abr_flagged}, {"compressed", d.abr_compressed}, {"masks_widened", d.abr_masks_widened}}},
+                           {"abr", {{"flagged", d.abr_flagged}, {"compressed", d.abr_compressed}, {"retraced", d.abr_retraced}, {"masks_widened", d.abr_masks_widened}}},
                            {"masks_missing", d.masks_missing}, {"note", d.note}, {"timings_s", timings},
                            {"output", "objects/" + objects[k].name + ".ply"}});
   }

@@ -539,3 +539,57 @@ TEST_CASE("expect_views skips candidates whose gate cannot open, with the same r
   vcar::BoundaryRefinement next(g, cand);
   CHECK_THROWS_AS(next.carry(more), vcar::Error);  // partial state cannot be carried
 }
+
+TEST_CASE("defer_tracing and refine_deferred: the flagged candidates left untraced, refined alone, complete a full refinement") {
+  const RingFixture f = ring_fixture();
+  std::vector<vcar::Index> cand(f.scene.size());
+  for (std::size_t i = 0; i < cand.size(); ++i) cand[i] = static_cast<vcar::Index>(i);
+  vcar::AbrParams p;
+  std::size_t retraced_total = 0;
+  for (float rho : {0.6f, 0.3f, 0.f}) {
+    p.rho = rho;
+    INFO("rho " << rho);
+    vcar::BoundaryRefinement full(f.scene, cand, p), deferred(f.scene, cand, p);
+    deferred.defer_tracing();
+    for (int v = 0; v < 6; ++v) {
+      full.add_view(f.cams[v], f.masks[v]);
+      deferred.add_view(f.cams[v], f.masks[v]);
+    }
+    // The counts are exact (the gate reads them); only the minima can miss views.
+    std::size_t missing = 0;
+    for (std::size_t k = 0; k < cand.size(); ++k) {
+      REQUIRE(deferred.n_vis(k) == full.n_vis(k));
+      REQUIRE(deferred.n_ovf(k) == full.n_ovf(k));
+      for (int d = 0; d < 3; ++d) missing += deferred.min_factor(k, d) != full.min_factor(k, d);
+    }
+    const std::vector<std::size_t> again = deferred.flagged_untraced();
+    retraced_total += again.size();
+    const vcar::AbrResult partial = deferred.finish(), ref = full.finish();
+    CHECK(partial.flagged == ref.flagged);
+    if (rho > 0.f) CHECK(missing > 0);  // some minima were left out (not traced)
+    // refine_deferred: those candidates once more, alone, complete it bit for bit.
+    int passes = 0;
+    const vcar::AbrResult a = vcar::refine_deferred(f.scene, cand, p, 6, [&](auto&& add) {
+      ++passes;
+      for (int v = 0; v < 6; ++v) add(f.cams[v], f.masks[v]);
+    });
+    CHECK(passes == (again.empty() ? 1 : 2));
+    CHECK(a.retraced == again.size());
+    CHECK(a.flagged == ref.flagged);
+    CHECK(a.compressed == ref.compressed);
+    CHECK(a.log_scale == ref.log_scale);
+    CHECK(a.axis_compressed == ref.axis_compressed);
+    // Every other flagged candidate was traced in each view it overflowed: its minima are exact.
+    for (std::size_t k = 0; k < cand.size(); ++k)
+      if (!std::binary_search(again.begin(), again.end(), k) && full.n_vis(k) > 0 &&
+          static_cast<float>(full.n_ovf(k)) / static_cast<float>(full.n_vis(k)) > rho)
+        for (int d = 0; d < 3; ++d) REQUIRE(deferred.min_factor(k, d) == full.min_factor(k, d));
+  }
+  CHECK(retraced_total > 0);  // the second refinement had work to do
+  vcar::BoundaryRefinement started(f.scene, cand, p);
+  started.add_view(f.cams[0], f.masks[0]);
+  CHECK_THROWS_AS(started.defer_tracing(), vcar::Error);  // before the first view only
+  vcar::BoundaryRefinement deferring(f.scene, cand, p), next(f.scene, cand, p);
+  deferring.defer_tracing();
+  CHECK_THROWS_AS(next.carry(deferring), vcar::Error);  // partial minima cannot be carried
+}

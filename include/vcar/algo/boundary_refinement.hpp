@@ -72,6 +72,7 @@ struct AbrResult {
   std::size_t flagged = 0;       // candidates with gamma = n_ovf / n_vis > rho
   std::size_t compressed = 0;    // flagged candidates with at least one axis scaled by f < 1
   std::vector<std::uint8_t> axis_compressed;  // bit d set: axis d of candidate k was compressed
+  std::size_t retraced = 0;      // refine_deferred: flagged candidates refined once more, alone
 };
 
 // Eq. 11: w_d = s_d^2 (u^T q_d)^2, the variance that axis d contributes along unit u.
@@ -263,12 +264,54 @@ class BoundaryRefinement {
     if (expected_ && views_ >= expected_)
       throw Error("more views than expect_views announced (" + std::to_string(expected_) + ")", "view '" + cam.name + "'");
     enter_view(cam);
-    tiles_.build(mask);
+    // Few candidates (under one per 256 pixels): observed one by one, building the mask tiles
+    // would cost more than they save (same result either way).
+    const bool tiles = size() * 256 >= mask.pixels();
+    if (tiles) tiles_.build(mask);
     // With expect_views: this view and those after it; a candidate whose gate cannot open even
     // if it overflows in all of them is not observed any more.
     const std::size_t remaining = expected_ ? expected_ - views_ + 1 : 0;
-    observe_view(cam, mask, true, [&](std::size_t k) { return !expected_ || gate_can_open(k, remaining); },
-                 [&](std::size_t k, const AbrObservation& obs) { add(k, obs, view); });
+    auto want = [&](std::size_t k) { return !expected_ || gate_can_open(k, remaining); };
+    if (!defer_) {
+      observe_view(cam, mask, tiles, want, [&](std::size_t k, const AbrObservation& obs) { add(k, obs, view); });
+      return;
+    }
+    // defer_tracing: an overflowing endpoint is traced only while the slot's overflow ratio,
+    // this view counted as overflowing, is above rho; the slots left untraced are marked.
+    const float rho = params_.rho;
+    auto trace = [&](std::size_t k) { return static_cast<float>(n_ovf_[k] + 1) > rho * static_cast<float>(n_vis_[k] + 1); };
+    observe_view(cam, mask, tiles, want, [&](std::size_t k, const AbrObservation& obs) {
+      if (obs.overflow && !trace(k)) untraced_[k] = 1;  // (the counts trace() read are still this view's)
+      add(k, obs, view);
+    }, nullptr, trace);
+  }
+
+  // Beyond the paper (same result, less work): with defer_tracing, add_view traces a candidate's
+  // overflowing endpoints (B.3, the march and Eq. 11-13) only while its overflow ratio, the view
+  // counted as overflowing, is above rho, i.e. while it looks bound to be flagged; the counts
+  // (n_vis, n_ovf) and so the gate stay exact. Most candidates of an object overflow in a few
+  // views only and are never traced. flagged_untraced() then lists the flagged candidates
+  // whose minima miss a view: a refinement of those alone over the same views gives their exact
+  // factors (refine_deferred below does it), and the rest of finish() is exact.
+  // Call before the first view.
+  void defer_tracing() {
+    if (views_ != 0) throw Error("defer_tracing is called before the first view", "BoundaryRefinement");
+    if (!mode_.empty()) throw Error("defer_tracing does not combine with carry", "BoundaryRefinement");
+    defer_ = true;
+    untraced_.assign(size(), 0);
+  }
+  // Positions k (into candidates()) flagged by the gate (B.3) whose minima miss an overflowing
+  // view (defer_tracing), ascending.
+  std::vector<std::size_t> flagged_untraced() const {
+    std::vector<std::size_t> out;
+    if (!defer_) return out;
+    for (std::size_t k = 0; k < size(); ++k) {
+      const std::size_t j = slot_[k];
+      if (untraced_[j] && n_vis_[j] > 0 &&
+          static_cast<float>(n_ovf_[j]) / static_cast<float>(n_vis_[j]) > params_.rho)  // finish()'s gate
+        out.push_back(k);
+    }
+    return out;
   }
 
   // Announces that exactly `total` views will be added (add_view), which lets the refinement
@@ -300,6 +343,8 @@ class BoundaryRefinement {
     if (!mode_.empty()) throw Error("carry is called once, before any view", "BoundaryRefinement");
     if (previous.expected_ || expected_)
       throw Error("a refinement that skips candidates (expect_views) cannot be carried", "BoundaryRefinement");
+    if (previous.defer_ || defer_)
+      throw Error("a refinement that defers tracing cannot be carried", "BoundaryRefinement");
     if (views_ != 0) throw Error("carry needs a refinement that has seen no view yet", "BoundaryRefinement");
     const std::size_t n = size();
     mode_.assign(n, fresh);
@@ -334,7 +379,7 @@ class BoundaryRefinement {
         if (obs.overflow) --n_ovf_[k];
         for (int d = 0; d < 3; ++d)
           if (arg_[d][k] == view) mode_[k] = stale;  // this view set a minimum
-      }, nullptr, false);
+      }, nullptr, &never);
     }
     if (new_mask) {
       check_view(cam, *new_mask, view);
@@ -413,14 +458,17 @@ class BoundaryRefinement {
   std::uint16_t n_ovf(std::size_t k) const { return n_ovf_[slot_[k]]; }
   float min_factor(std::size_t k, int d) const { return f_[d][slot_[k]]; }
 
-  // Bytes of state held per candidate (index, geometry copy, counters, running minima).
+  // Bytes of state held per candidate (index, geometry copy, counters, running minima, and with
+  // defer_tracing its untraced mark).
   static constexpr std::size_t bytes_per_candidate() {
     return 2 * sizeof(std::uint32_t) + (3 + 9 + 3 + 3) * sizeof(float) + 2 * sizeof(std::uint16_t) + 3 * sizeof(float) +
-           3 * sizeof(std::uint16_t);
+           3 * sizeof(std::uint16_t) + sizeof(std::uint8_t);
   }
 
  private:
   static constexpr std::uint16_t no_view = std::numeric_limits<std::uint16_t>::max();
+  static bool always(std::size_t) { return true; }
+  static bool never(std::size_t) { return false; }
   enum : std::uint8_t { carried = 0, fresh = 1, stale = 2 };
 
   void check_view(const Camera& cam, const Mask& mask, std::uint16_t view) const {
@@ -477,10 +525,10 @@ class BoundaryRefinement {
   // With `tiles` (tiles_ built from this mask) whole chunks that the mask's tiles decide skip
   // the covariance (same counts and minima).
   // `boxes` (optional) lists the chunk boxes that hold a wanted slot; the others are skipped.
-  // `factors` false: apply needs the counts only (no endpoint is traced, obs.f stays +inf).
-  template <class Want, class Apply>
+  // `trace(k)` false: apply needs slot k's counts only (no endpoint is traced, obs.f stays +inf).
+  template <class Want, class Apply, class Trace = bool (*)(std::size_t)>
   void observe_view(const Camera& cam, const Mask& mask, bool tiles, Want want, Apply apply,
-                    const std::vector<std::uint32_t>* boxes = nullptr, bool factors = true) {
+                    const std::vector<std::uint32_t>* boxes = nullptr, Trace trace = &always) {
     const AbrParams p = params_;
     constexpr float lowest = -std::numeric_limits<float>::infinity();
     const std::array<float, 3> no_factors{lowest, lowest, lowest};
@@ -530,7 +578,7 @@ class BoundaryRefinement {
               continue;  // B.1, rule (e)
             }
             const Eigen::Vector3f s(s_[0][k], s_[1][k], s_[2][k]);
-            const std::array<float, 3> beat = factors ? std::array<float, 3>{f_[0][k], f_[1][k], f_[2][k]} : no_factors;
+            const std::array<float, 3> beat = trace(k) ? std::array<float, 3>{f_[0][k], f_[1][k], f_[2][k]} : no_factors;
             const AbrObservation obs = tiles ? observe_lane(mask, tiles_, g, l, s, p, &beat)
                                              : observe_lane(mask, mask, g, l, s, p, &beat);
             if (obs.eligible) apply(k, obs);
@@ -628,6 +676,41 @@ class BoundaryRefinement {
   std::vector<std::uint32_t> wanted_boxes_;  // chunk boxes with fresh or stale slots (completion)
   std::size_t views_ = 0;
   std::size_t expected_ = 0;                 // expect_views (0: every candidate observed in every view)
+  bool defer_ = false;                       // defer_tracing
+  std::vector<std::uint8_t> untraced_;       // defer_tracing: an overflowing view was not traced
 };
+
+// ABR (Eq. 9-14) of `candidates` over a sequence of views with the least tracing: one
+// BoundaryRefinement with expect_views and defer_tracing, then the flagged candidates it left
+// untraced once more, alone. The result equals one BoundaryRefinement that saw every view (bit
+// for bit: the counts are exact in both, and each candidate's minima come from a refinement that
+// traced all its overflowing views). `for_each_view(add)` calls add(camera, mask) once per view,
+// `views` of them, in the same order each time; it is called once, or twice when some flagged
+// candidate was left untraced.
+template <class ForEachView>
+AbrResult refine_deferred(const GaussianScene& scene, const std::vector<Index>& candidates, const AbrParams& params,
+                          std::size_t views, ForEachView&& for_each_view) {
+  BoundaryRefinement abr(scene, candidates, params);
+  abr.expect_views(views);  // candidates whose gate can no longer open are skipped (same result)
+  abr.defer_tracing();
+  for_each_view([&](const Camera& cam, const Mask& mask) { abr.add_view(cam, mask); });
+  AbrResult a = abr.finish();
+  const std::vector<std::size_t> again = abr.flagged_untraced();
+  if (again.empty()) return a;
+  std::vector<Index> sub(again.size());
+  for (std::size_t i = 0; i < again.size(); ++i) sub[i] = candidates[again[i]];
+  BoundaryRefinement exact(scene, std::move(sub), params);
+  exact.expect_views(views);
+  for_each_view([&](const Camera& cam, const Mask& mask) { exact.add_view(cam, mask); });
+  const AbrResult b = exact.finish();
+  for (std::size_t i = 0; i < again.size(); ++i) {
+    for (int d = 0; d < 3; ++d) a.log_scale[d][again[i]] = b.log_scale[d][i];
+    a.axis_compressed[again[i]] = b.axis_compressed[i];
+  }
+  a.compressed = static_cast<std::size_t>(
+      std::count_if(a.axis_compressed.begin(), a.axis_compressed.end(), [](std::uint8_t c) { return c != 0; }));
+  a.retraced = again.size();
+  return a;
+}
 
 }  // namespace vcar

@@ -115,7 +115,6 @@ inline BoxView project_box(const MeanProjection& w, const float lo[3], const flo
   BoxView out;
   out.x1 = w.width - 1;  // until known: the whole image
   out.y1 = w.height - 1;
-  float t[8][3];
   float scale = 0;  // magnitude of the terms of t = R mu + t_w (rounding is relative to it)
   for (int r = 0; r < 3; ++r) {
     float s = std::abs(w.t[r]);
@@ -125,34 +124,50 @@ inline BoxView project_box(const MeanProjection& w, const float lo[3], const flo
   for (int k = 0; k < 3; ++k)
     if (!std::isfinite(lo[k]) || !std::isfinite(hi[k])) return out;  // non-finite box: per-mean test
   if (!(scale < 1e30f)) return out;
-  float zmin = INFINITY, zmax = -INFINITY;
-  for (int c = 0; c < 8; ++c) {
-    const float p[3] = {(c & 1) ? hi[0] : lo[0], (c & 2) ? hi[1] : lo[1], (c & 4) ? hi[2] : lo[2]};
-    for (int r = 0; r < 3; ++r) t[c][r] = w.R[3 * r] * p[0] + w.R[3 * r + 1] * p[1] + w.R[3 * r + 2] * p[2] + w.t[r];
-    zmin = std::min(zmin, t[c][2]);
-    zmax = std::max(zmax, t[c][2]);
+  // The 8 corners in SIMD lanes (corner c = lane mod 8: bit d of c picks hi over lo on axis d),
+  // projected with project()'s arithmetic; a 16-lane batch holds each corner twice.
+  using B = simd::batch<float>;
+  constexpr std::size_t W = simd::width, N = W > 8 ? W : 8;
+  alignas(64) static constexpr auto corner_bit = [] {
+    std::array<std::array<float, N>, 3> b{};
+    for (std::size_t c = 0; c < N; ++c)
+      for (int d = 0; d < 3; ++d) b[d][c] = static_cast<float>(((c % 8) >> d) & 1);
+    return b;
+  }();
+  alignas(64) float us[N], vs[N], zs[N];
+  for (std::size_t c0 = 0; c0 < N; c0 += W) {
+    B p[3];
+    for (int d = 0; d < 3; ++d) p[d] = simd::select(B::load_aligned(corner_bit[d].data() + c0) > B(0.5f), B(hi[d]), B(lo[d]));
+    auto row = [&](int r) {  // t = R_w mu + t_w, as project()
+      return simd::fma(B(w.R[3 * r]), p[0], simd::fma(B(w.R[3 * r + 1]), p[1], simd::fma(B(w.R[3 * r + 2]), p[2], B(w.t[r]))));
+    };
+    const B tx = row(0), ty = row(1), tz = row(2);
+    tz.store_aligned(zs + c0);
+    ((B(w.fx) * tx) / tz + B(w.cx)).store_aligned(us + c0);  // conventions §2 (garbage where z <= 0: unused)
+    ((B(w.fy) * ty) / tz + B(w.cy)).store_aligned(vs + c0);
   }
+  float zmin = zs[0], zmax = zs[0];
+  for (std::size_t c = 1; c < 8; ++c) zmin = std::min(zmin, zs[c]), zmax = std::max(zmax, zs[c]);
   const float dz = 1e-5f * scale;
   if (zmax < -dz) { out.visibility = BoxView::none_visible; return out; }  // every z < 0
   if (!(zmin > dz)) return out;                                            // straddles z = 0
   out.zmin = zmin;
-  float umin = INFINITY, umax = -INFINITY, vmin = INFINITY, vmax = -INFINITY;
-  for (int c = 0; c < 8; ++c) {
-    const float u = w.fx * t[c][0] / t[c][2] + w.cx, v = w.fy * t[c][1] / t[c][2] + w.cy;
-    umin = std::min(umin, u); umax = std::max(umax, u);
-    vmin = std::min(vmin, v); vmax = std::max(vmax, v);
+  float umin = us[0], umax = us[0], vmin = vs[0], vmax = vs[0];
+  for (std::size_t c = 1; c < 8; ++c) {
+    umin = std::min(umin, us[c]); umax = std::max(umax, us[c]);
+    vmin = std::min(vmin, vs[c]); vmax = std::max(vmax, vs[c]);
   }
   // Rounding of u = fx x / z + cx per mean: well below this margin (pixels).
   const float m = 0.5f + 1e-5f * ((w.fx + w.fy) * scale / zmin + std::max(std::abs(umin), std::abs(umax)) +
                                   std::max(std::abs(vmin), std::abs(vmax)));
   umin -= m; umax += m; vmin -= m; vmax += m;
-  const float W = static_cast<float>(w.width), H = static_cast<float>(w.height);
-  if (umax < 0.f || vmax < 0.f || umin >= W || vmin >= H) { out.visibility = BoxView::none_visible; return out; }
+  const float W_ = static_cast<float>(w.width), H = static_cast<float>(w.height);
+  if (umax < 0.f || vmax < 0.f || umin >= W_ || vmin >= H) { out.visibility = BoxView::none_visible; return out; }
   out.x0 = static_cast<int>(std::floor(std::max(umin, 0.f)));
   out.y0 = static_cast<int>(std::floor(std::max(vmin, 0.f)));
-  out.x1 = static_cast<int>(std::floor(std::min(umax, W - 1.f)));
+  out.x1 = static_cast<int>(std::floor(std::min(umax, W_ - 1.f)));
   out.y1 = static_cast<int>(std::floor(std::min(vmax, H - 1.f)));
-  if (umin >= 0.f && vmin >= 0.f && umax < W && vmax < H) out.visibility = BoxView::all_visible;
+  if (umin >= 0.f && vmin >= 0.f && umax < W_ && vmax < H) out.visibility = BoxView::all_visible;
   return out;
 }
 

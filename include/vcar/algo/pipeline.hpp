@@ -65,6 +65,7 @@ struct Diagnostics {
   std::vector<Camera> sampled_cameras;  // V_sampled
   ObjectSphere sphere{};
   std::size_t abr_flagged = 0, abr_compressed = 0;
+  std::size_t abr_retraced = 0;     // flagged candidates refined once more, alone (BoundaryRefinement::defer_tracing)
   std::size_t abr_masks_widened = 0; // training masks ABR read widened by their undershoot (Eq. R8)
   std::size_t masks_missing = 0;    // frames the segmenter answered with "no mask"
   std::size_t mask_store_bytes = 0; // run-length bytes held for ABR
@@ -300,21 +301,22 @@ inline LogScales refine_boundaries(const GaussianScene& scene, const std::vector
     return out;
   }
   const auto ta = Clock::now();
-  BoundaryRefinement abr(scene, selected, params.abr());
   std::size_t views = 0;
   for (const auto& m : train_masks) views += m.has_value();
-  abr.expect_views(views);  // candidates whose gate can no longer open are skipped (same result)
   Mask scratch;
+  AbrResult a = refine_deferred(scene, selected, params.abr(), views, [&](auto&& add) {
+    for (std::size_t j = 0; j < train_masks.size(); ++j) {
+      if (!train_masks[j]) continue;
+      train_masks[j]->decode(scratch);
+      add(train_cameras[j], scratch);
+    }
+  });
   diag.mask_store_bytes = 0;
-  for (std::size_t j = 0; j < train_masks.size(); ++j) {
-    if (!train_masks[j]) continue;
-    diag.mask_store_bytes += train_masks[j]->bytes();
-    train_masks[j]->decode(scratch);
-    abr.add_view(train_cameras[j], scratch);
-  }
-  AbrResult a = abr.finish();
+  for (const auto& m : train_masks)
+    if (m) diag.mask_store_bytes += m->bytes();
   diag.abr_flagged = a.flagged;
   diag.abr_compressed = a.compressed;
+  diag.abr_retraced = a.retraced;
   diag.timings_s.emplace_back("abr", seconds_since(ta));
   return std::move(a.log_scale);
 }
