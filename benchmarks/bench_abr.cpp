@@ -218,7 +218,7 @@ void run_scenario(bool limb_band, int n, int views, int repeats) {
   std::printf("refine_deferred (as vcar::segment), 1 thread: %8.3f s  %10.3e Gaussian-views/s  (x%.2f vs add_view of every view), "
               "%d threads: %8.3f s  %10.3e Gaussian-views/s  (x%.2f); %zu retraced; same result: %s\n",
               td1, gv / td1, t1 / td1, std::max(2, hw), td2, gv / td2, t2 / td2, d1.retraced,
-              d1.log_scale == r1.log_scale && d2.log_scale == r1.log_scale && d1.axis_compressed == r1.axis_compressed ? "yes" : "NO");
+              d1.log_scale == r1.log_scale && d2.log_scale == r1.log_scale && d1.axis_compressed == r1.axis_compressed && d2.axis_compressed == r1.axis_compressed ? "yes" : "NO");
   std::printf("plain scalar 1 thread: %8.3f s  %10.3e Gaussian-views/s  (CPU %.3f s, %.0f ns per Gaussian-view)\n",
               t_plain, gv / t_plain, median(cpup), 1e9 * median(cpup) / gv);
   std::printf("ratios: library 1 thread / plain = x%.2f, library %d threads / plain = x%.2f\n", t_plain / t1,

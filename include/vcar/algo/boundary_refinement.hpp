@@ -264,9 +264,7 @@ class BoundaryRefinement {
     if (expected_ && views_ >= expected_)
       throw Error("more views than expect_views announced (" + std::to_string(expected_) + ")", "view '" + cam.name + "'");
     enter_view(cam);
-    // Few candidates (under one per 256 pixels): observed one by one, building the mask tiles
-    // would cost more than they save (same result either way).
-    const bool tiles = size() * 256 >= mask.pixels();
+    const bool tiles = tiles_pay(size(), mask);
     if (tiles) tiles_.build(mask);
     // With expect_views: this view and those after it; a candidate whose gate cannot open even
     // if it overflows in all of them is not observed any more.
@@ -281,7 +279,7 @@ class BoundaryRefinement {
     const float rho = params_.rho;
     auto trace = [&](std::size_t k) { return static_cast<float>(n_ovf_[k] + 1) > rho * static_cast<float>(n_vis_[k] + 1); };
     observe_view(cam, mask, tiles, want, [&](std::size_t k, const AbrObservation& obs) {
-      if (obs.overflow && !trace(k)) untraced_[k] = 1;  // (the counts trace() read are still this view's)
+      if (obs.overflow && !trace(k)) untraced_[k] = 1;  // before add(): the counts observe_view read
       add(k, obs, view);
     }, nullptr, trace);
   }
@@ -406,9 +404,7 @@ class BoundaryRefinement {
       completing_ = true;
     }
     if (wanted_ == 0) return;
-    // Few candidates (under one per 256 pixels): observed one by one, building the mask tiles
-    // would cost more than they save (same result either way).
-    const bool tiles = wanted_ * 256 >= static_cast<std::size_t>(mask.pixels());
+    const bool tiles = tiles_pay(wanted_, mask);
     if (tiles) tiles_.build(mask);
     observe_view(cam, mask, tiles, [&](std::size_t k) { return mode_[k] != carried; },
                  [&](std::size_t k, const AbrObservation& obs) {
@@ -467,6 +463,9 @@ class BoundaryRefinement {
 
  private:
   static constexpr std::uint16_t no_view = std::numeric_limits<std::uint16_t>::max();
+  // Whether building the mask tiles for `observed` candidates pays: under one candidate per 256
+  // pixels they are observed one by one on the mask itself (the same result either way).
+  static bool tiles_pay(std::size_t observed, const Mask& mask) { return observed * 256 >= mask.pixels(); }
   static bool always(std::size_t) { return true; }
   static bool never(std::size_t) { return false; }
   enum : std::uint8_t { carried = 0, fresh = 1, stale = 2 };

@@ -57,16 +57,25 @@ struct ProjectedBatch {
   simd::batch<float> z;
 };
 
-inline ProjectedBatch project(const MeanProjection& w, const float* x, const float* y, const float* z) {
+// Image point (u, v) and camera depth z of a batch of points (X, Y, Z): the arithmetic that
+// project() and project_box share.
+struct ImagePoints {
+  simd::batch<float> u, v, z;
+};
+inline ImagePoints image_points(const MeanProjection& w, const simd::batch<float>& X, const simd::batch<float>& Y,
+                                const simd::batch<float>& Z) {
   using B = simd::batch<float>;
-  using BI = simd::batch<std::int32_t>;
-  const B X = B::load_unaligned(x), Y = B::load_unaligned(y), Z = B::load_unaligned(z);
   auto row = [&](int r) {  // t = R_w mu + t_w
     return simd::fma(B(w.R[3 * r]), X, simd::fma(B(w.R[3 * r + 1]), Y, simd::fma(B(w.R[3 * r + 2]), Z, B(w.t[r]))));
   };
   const B tx = row(0), ty = row(1), tz = row(2);
-  const B u = (B(w.fx) * tx) / tz + B(w.cx);  // conventions §2: u = fx x / z + cx
-  const B v = (B(w.fy) * ty) / tz + B(w.cy);
+  return {(B(w.fx) * tx) / tz + B(w.cx), (B(w.fy) * ty) / tz + B(w.cy), tz};  // conventions §2: u = fx x / z + cx
+}
+
+inline ProjectedBatch project(const MeanProjection& w, const float* x, const float* y, const float* z) {
+  using B = simd::batch<float>;
+  using BI = simd::batch<std::int32_t>;
+  const auto [u, v, tz] = image_points(w, B::load_unaligned(x), B::load_unaligned(y), B::load_unaligned(z));
   // Eq. 1: z > 0, 0 <= u < W, 0 <= v < H (NaN fails every comparison).
   const auto in = (tz > B(0.f)) & (u >= B(0.f)) & (u < B(static_cast<float>(w.width))) &
                   (v >= B(0.f)) & (v < B(static_cast<float>(w.height)));
@@ -127,7 +136,7 @@ inline BoxView project_box(const MeanProjection& w, const float lo[3], const flo
   // The 8 corners in SIMD lanes (corner c = lane mod 8: bit d of c picks hi over lo on axis d),
   // projected with project()'s arithmetic; a 16-lane batch holds each corner twice.
   using B = simd::batch<float>;
-  constexpr std::size_t W = simd::width, N = W > 8 ? W : 8;
+  constexpr std::size_t L = simd::width, N = L > 8 ? L : 8;
   alignas(64) static constexpr auto corner_bit = [] {
     std::array<std::array<float, N>, 3> b{};
     for (std::size_t c = 0; c < N; ++c)
@@ -135,16 +144,13 @@ inline BoxView project_box(const MeanProjection& w, const float lo[3], const flo
     return b;
   }();
   alignas(64) float us[N], vs[N], zs[N];
-  for (std::size_t c0 = 0; c0 < N; c0 += W) {
+  for (std::size_t c0 = 0; c0 < N; c0 += L) {
     B p[3];
     for (int d = 0; d < 3; ++d) p[d] = simd::select(B::load_aligned(corner_bit[d].data() + c0) > B(0.5f), B(hi[d]), B(lo[d]));
-    auto row = [&](int r) {  // t = R_w mu + t_w, as project()
-      return simd::fma(B(w.R[3 * r]), p[0], simd::fma(B(w.R[3 * r + 1]), p[1], simd::fma(B(w.R[3 * r + 2]), p[2], B(w.t[r]))));
-    };
-    const B tx = row(0), ty = row(1), tz = row(2);
-    tz.store_aligned(zs + c0);
-    ((B(w.fx) * tx) / tz + B(w.cx)).store_aligned(us + c0);  // conventions §2 (garbage where z <= 0: unused)
-    ((B(w.fy) * ty) / tz + B(w.cy)).store_aligned(vs + c0);
+    const ImagePoints q = image_points(w, p[0], p[1], p[2]);  // (u, v: unused where z <= 0)
+    q.z.store_aligned(zs + c0);
+    q.u.store_aligned(us + c0);
+    q.v.store_aligned(vs + c0);
   }
   float zmin = zs[0], zmax = zs[0];
   for (std::size_t c = 1; c < 8; ++c) zmin = std::min(zmin, zs[c]), zmax = std::max(zmax, zs[c]);
@@ -161,13 +167,13 @@ inline BoxView project_box(const MeanProjection& w, const float lo[3], const flo
   const float m = 0.5f + 1e-5f * ((w.fx + w.fy) * scale / zmin + std::max(std::abs(umin), std::abs(umax)) +
                                   std::max(std::abs(vmin), std::abs(vmax)));
   umin -= m; umax += m; vmin -= m; vmax += m;
-  const float W_ = static_cast<float>(w.width), H = static_cast<float>(w.height);
-  if (umax < 0.f || vmax < 0.f || umin >= W_ || vmin >= H) { out.visibility = BoxView::none_visible; return out; }
+  const float W = static_cast<float>(w.width), H = static_cast<float>(w.height);
+  if (umax < 0.f || vmax < 0.f || umin >= W || vmin >= H) { out.visibility = BoxView::none_visible; return out; }
   out.x0 = static_cast<int>(std::floor(std::max(umin, 0.f)));
   out.y0 = static_cast<int>(std::floor(std::max(vmin, 0.f)));
-  out.x1 = static_cast<int>(std::floor(std::min(umax, W_ - 1.f)));
+  out.x1 = static_cast<int>(std::floor(std::min(umax, W - 1.f)));
   out.y1 = static_cast<int>(std::floor(std::min(vmax, H - 1.f)));
-  if (umin >= 0.f && vmin >= 0.f && umax < W_ && vmax < H) out.visibility = BoxView::all_visible;
+  if (umin >= 0.f && vmin >= 0.f && umax < W && vmax < H) out.visibility = BoxView::all_visible;
   return out;
 }
 
