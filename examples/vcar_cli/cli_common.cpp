@@ -547,6 +547,7 @@ nlohmann::json write_segmentation(const std::filesystem::path& out, const Gaussi
       {"sampled_views", d.sampled_cameras.size()},
       {"sampled_positions", sampled},
       {"abr", {{"flagged", d.abr_flagged}, {"compressed", d.abr_compressed}, {"retraced", d.abr_retraced}, {"masks_widened", d.abr_masks_widened}}},
+      {"coplanar_dropped", d.coplanar_dropped},
       {"masks_missing", d.masks_missing},
       {"note", d.note},
       {"timings_s", timings},

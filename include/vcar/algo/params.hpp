@@ -110,6 +110,14 @@ struct VcarParams {
   // Eq. 9-13 read Sigma2D with the renderer's eps2d low-pass (conventions §3, true) or the
   // Gaussian's own footprint (false: overflow within ~1.6 px no longer forces f_min).
   bool abr_lowpass = true;
+  // Eq. R10: a fine candidate that no training view sees (the coarse round's occlusion test) is
+  // background when more seen background Gaussians than seen selected ones lie on its plane
+  // within coplanar_radius D (D the selection's extent): normals within coplanar_angle_deg,
+  // plane distance within coplanar_slab times the two thicknesses. Needs coarse_occlusion;
+  // 0 = off.
+  float coplanar_radius = 0.f;
+  float coplanar_angle_deg = 5.f;
+  float coplanar_slab = 1.f;
 
   // Paper defaults for NVOS (Sec. 4.2).
   static VcarParams nvos() { return VcarParams{}; }
@@ -143,8 +151,8 @@ struct VcarParams {
   // (R4), views weighted by foreshortening (R5), the fine round's band as wide as the masks'
   // measured undershoot (R6), the strict threshold 0.85 when the fine vote is decisive (R7),
   // ABR on masks widened by their undershoot when it is split (R8), stages 2-3 again from the
-  // coarse vote at 0.3 when it is split (R9), and ABR on the Gaussians' own
-  // footprints. The edge band (R1) is off: R6-R7 do its work
+  // coarse vote at 0.3 when it is split (R9), hidden candidates on a seen background plane
+  // dropped (R10), and ABR on the Gaussians' own footprints. The edge band (R1) is off: R6-R7 do its work
   // (docs/results.md, ablation). What vcar::segment uses when given no parameters.
   static VcarParams robust() {
     VcarParams p;
@@ -159,6 +167,7 @@ struct VcarParams {
     p.abr_undershoot = true;
     p.tau_coarse_split = 0.3f;
     p.abr_lowpass = false;
+    p.coplanar_radius = 0.75f;
     return p;
   }
   // A preset by name: robust, nvos, lerf, reference_code; vcar::Error otherwise.
@@ -208,6 +217,8 @@ struct VcarParams {
     f("foreshortening", p.foreshortening); f("undershoot_band", p.undershoot_band);
     f("tau_strict", p.tau_strict); f("split_fraction", p.split_fraction); f("abr_lowpass", p.abr_lowpass);
     f("abr_undershoot", p.abr_undershoot); f("tau_coarse_split", p.tau_coarse_split);
+    f("coplanar_radius", p.coplanar_radius); f("coplanar_angle_deg", p.coplanar_angle_deg);
+    f("coplanar_slab", p.coplanar_slab);
   }
 
   // Throws vcar::Error naming the first parameter outside its range.
@@ -249,6 +260,13 @@ struct VcarParams {
     unit("tau_strict", tau_strict);
     unit("split_fraction", split_fraction);
     unit("tau_coarse_split", tau_coarse_split);
+    if (!(coplanar_radius >= 0.f && coplanar_radius <= 10.f))
+      bad("coplanar_radius", "must be in [0, 10] (0 = off), got " + std::to_string(coplanar_radius));
+    if (!(coplanar_angle_deg > 0.f && coplanar_angle_deg < 90.f))
+      bad("coplanar_angle_deg", "must be in (0, 90), got " + std::to_string(coplanar_angle_deg));
+    if (!(coplanar_slab >= 0.f && std::isfinite(coplanar_slab))) bad("coplanar_slab", "must be >= 0");
+    if (coplanar_radius > 0.f && !coarse_occlusion)
+      bad("coplanar_radius", "Eq. R10 reads the coarse round's occlusion test: set coarse_occlusion=true or coplanar_radius=0");
     if (!(edge_band >= 0.f && edge_band <= 1.f)) bad("edge_band", "must be in [0, 1] (0 = off), got " + std::to_string(edge_band));
   }
 

@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <functional>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -20,6 +21,7 @@
 
 #include "vcar/algo/robust_voting.hpp"
 #include "vcar/algo/boundary_refinement.hpp"
+#include "vcar/algo/coplanar_background.hpp"
 #include "vcar/algo/decisive_threshold.hpp"
 #include "vcar/algo/params.hpp"
 #include "vcar/algo/robust_sphere.hpp"
@@ -67,6 +69,7 @@ struct Diagnostics {
   std::size_t abr_flagged = 0, abr_compressed = 0;
   std::size_t abr_retraced = 0;     // flagged candidates refined once more, alone (BoundaryRefinement::defer_tracing)
   std::size_t abr_masks_widened = 0; // training masks ABR read widened by their undershoot (Eq. R8)
+  std::size_t coplanar_dropped = 0;  // hidden candidates on a seen background plane, dropped (Eq. R10)
   std::size_t masks_missing = 0;    // frames the segmenter answered with "no mask"
   std::size_t mask_store_bytes = 0; // run-length bytes held for ABR
   std::string note;                 // why the pipeline stopped early, if it did
@@ -196,6 +199,10 @@ public:
     } else {
       paper_.emplace(scene);
     }
+  }
+  // Eq. R3's unoccluded view count V^o of every candidate (empty without the robust vote).
+  std::span<const std::uint16_t> unoccluded_views() const {
+    return robust_ ? robust_->unoccluded_views() : std::span<const std::uint16_t>{};
   }
   // The view's render is needed: depth and alpha for Eq. R3, alpha for Eq. R6.
   bool wants_depth() const { return occlusion_ || undershoot_; }
@@ -331,7 +338,8 @@ template <Renderer R, Segmenter S>
 bool refine(const GaussianScene& scene, const std::vector<Camera>& train_cameras, const Prompt& prompt, R& renderer,
             S& segmenter, const VcarParams& params, const ProgressCallback& progress, Clock::time_point t_start,
             std::vector<std::optional<RleMask>>& train_masks, std::vector<Index> selected, std::vector<float> scores,
-            SegmentationResult& result, std::string_view fine_round = "fine round") {
+            SegmentationResult& result, std::string_view fine_round = "fine round",
+            std::span<const std::uint16_t> coarse_seen = {}) {
   Diagnostics& diag = result.diagnostics;
   auto stage = [&](std::string_view name) {
     if (progress && !progress({name, 0, 0, seconds_since(t_start)})) throw Cancelled(std::string(name));
@@ -408,6 +416,30 @@ bool refine(const GaussianScene& scene, const std::vector<Camera>& train_cameras
     }
   }
 
+  // ---- Beyond the paper: hidden candidates on a seen background plane (Eq. R10), from the
+  // coarse round's occlusion test over the whole scene (coarse_seen: V^o per scene Gaussian).
+  if (params.coplanar_radius > 0.f && !coarse_seen.empty()) {
+    const auto tc = Clock::now();
+    const CoplanarParams cp{params.coplanar_radius, params.coplanar_angle_deg, params.coplanar_slab};
+    const std::vector<std::size_t> drop =
+        coplanar_background(scene, selected, [&](Index i) { return coarse_seen[i] > 0; }, cp);  // Eq. R10
+    std::size_t w = 0;
+    for (std::size_t k = 0, d = 0; k < selected.size(); ++k) {
+      if (d < drop.size() && drop[d] == k) { ++d; continue; }
+      selected[w] = selected[k];
+      scores[w++] = scores[k];
+    }
+    selected.resize(w);
+    scores.resize(w);
+    diag.coplanar_dropped = drop.size();
+    diag.n_final = selected.size();
+    timing("coplanar", seconds_since(tc));
+    if (selected.empty()) {
+      diag.note = "Eq. R10 dropped every candidate (hidden on a background plane); set coplanar_radius=0";
+      return false;
+    }
+  }
+
   // ---- Stage 3: ABR on the training views with masks from the latest round (Eq. 9-14, B).
   if (params.enable_abr) stage("abr");
   if (params.abr_undershoot && params.enable_abr && split)
@@ -436,7 +468,7 @@ bool refine_from_coarse(const GaussianScene& scene, const std::vector<Camera>& t
                         R& renderer, S& segmenter, const VcarParams& params, const ProgressCallback& progress,
                         Clock::time_point t_start, std::vector<std::optional<RleMask>>& train_masks,
                         CoarseSelection&& coarse_selection, SegmentationResult& result,
-                        std::string_view fine_round = "fine round") {
+                        std::string_view fine_round = "fine round", std::span<const std::uint16_t> coarse_seen = {}) {
   std::vector<Index> selected;
   std::vector<float> scores;
   coarse_selection(params.tau_coarse, selected, scores);
@@ -446,7 +478,7 @@ bool refine_from_coarse(const GaussianScene& scene, const std::vector<Camera>& t
   if (may_retake) coarse_masks = train_masks;  // run-length encoded: O(boundary) per view
   result.diagnostics.tau_coarse_applied = params.tau_coarse;
   bool complete = refine(scene, train_cameras, prompt, renderer, segmenter, params, progress, t_start, train_masks,
-                         std::move(selected), std::move(scores), result, fine_round);
+                         std::move(selected), std::move(scores), result, fine_round, coarse_seen);
   const Diagnostics& first = result.diagnostics;
   if (!may_retake || first.tau_fine_applied <= 0.f || !(first.tau_fine_applied < params.tau_strict)) return complete;
   coarse_selection(params.tau_coarse_split, selected, scores);                                // Eq. R9
@@ -458,7 +490,7 @@ bool refine_from_coarse(const GaussianScene& scene, const std::vector<Camera>& t
   d2.tau_coarse_applied = params.tau_coarse_split;
   train_masks = std::move(coarse_masks);
   complete = refine(scene, train_cameras, prompt, renderer, segmenter, params, progress, t_start, train_masks,
-                    std::move(selected), std::move(scores), second, fine_round);
+                    std::move(selected), std::move(scores), second, fine_round, coarse_seen);
   std::vector<std::pair<std::string, double>> timings = first.timings_s;
   for (const auto& stage : d2.timings_s) {  // (not a structured binding: clang 14 cannot capture one)
     auto at = std::find_if(timings.begin(), timings.end(), [&](const auto& t) { return t.first == stage.first; });
@@ -530,7 +562,7 @@ SegmentationResult segment(const GaussianScene& scene, const std::vector<Camera>
   const bool complete = detail::refine_from_coarse(
       scene, train_cameras, prompt, renderer, segmenter, params, progress, t_start, train_masks,
       [&](float tau, std::vector<Index>& selected, std::vector<float>& scores) { coarse.selected(tau, selected, scores); },
-      result);
+      result, "fine round", coarse.occlusion() ? coarse.unoccluded_views() : std::span<const std::uint16_t>{});
   timing("total", seconds_since(t_start));
   if (complete) stage("done");
   return result;

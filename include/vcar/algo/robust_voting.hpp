@@ -161,6 +161,8 @@ public:
   // Counters of candidate k: level 0 plain (V, F), 1 unoccluded (V^o, F^o), 2 sure (V^s, F^s).
   std::uint16_t visible(std::size_t k, int level = 0) const { return c_[2 * level][k]; }
   std::uint16_t foreground(std::size_t k, int level = 0) const { return c_[2 * level + 1][k]; }
+  // V^o of every candidate (level 1), aligned with the candidates.
+  std::span<const std::uint16_t> unoccluded_views() const { return c_[2]; }
   // Eq. R5 sums of candidate k at level 1 (unoccluded) or 2 (sure); 0 without foreshortening.
   float weight(std::size_t k, int level) const { return o_.foreshortening ? w_[2 * level - 2][k] : 0.f; }
   float weighted_foreground(std::size_t k, int level) const { return o_.foreshortening ? w_[2 * level - 1][k] : 0.f; }

@@ -1,0 +1,160 @@
+#pragma once
+// Beyond the paper: hidden candidates on a background surface are background
+// (docs/robust.md, Eq. R10).
+//
+// A surface of another object pressed against the target (the table under a torus's ring, the
+// face of a box that a cylinder leans on) is hidden in every training view, and it lies inside
+// the target's silhouette from every direction the fine round can see it from: mask votes
+// cannot tell it from the target's own underside. Its geometry can: it is flat, and the part of
+// the same surface that the cameras do see, next to it, is background. So a fine candidate i
+// that no training view sees takes the label of the seen Gaussians of its own plane nearby:
+//   n_i, phi_i        the normal and flatness of Eq. R5 (foreshortening.hpp)
+//   t_i = min_d s_d   its thickness
+//   Q_i = { q seen, phi_q >= phi_min, |mu_q - mu_i| <= r_c,                 (coplanar neighbours)
+//           |n_i . n_q| >= cos alpha, |n_i . (mu_q - mu_i)| <= k_t (t_i + t_q) }
+//   E_i = { q seen, selected, phi_q >= phi_min, |mu_q - mu_i| <= r_c,      (the object's own
+//           |n_i . n_q| <= cos beta, |n_i . (mu_q - mu_i)| <= sigma_c sqrt(n_i^T Sigma_q n_i) }  edges)
+//   B_i = |{q in Q_i : q not selected}|,  S_i = |{q in Q_i : q selected}| + |E_i|
+//   i is dropped  iff  i is hidden, phi_i >= phi_min and B_i > S_i                      (R10)
+// with r_c = c_r * D, D the selection's extent (the largest distance of an Eq. 4 inlier from
+// the robust centre), alpha = coplanar_angle_deg, k_t = coplanar_slab, beta = 60 degrees and
+// sigma_c = 3. E_i are seen faces of the selection that meet i's plane edge-on and reach it
+// within their 3-sigma extent: the plane is then one of the object's own faces (a box pressed
+// against another box), not a surface that passes under it (a table under a ring, whose seen
+// discs stay clear of it). "Seen" is the coarse round's occlusion test (Eq. R3 on renders of
+// the whole scene): seen unoccluded in at least one training view. A flat object lying on a
+// table is seen, so it is never dropped; curved surfaces have no coplanar neighbours beyond a
+// few of their own.
+// Cost: one pass over the scene for the region around the selection, a dense grid of cell r_c / 2
+// over its seen flat Gaussians, and for each hidden flat candidate the 125 cells around it.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "vcar/algo/foreshortening.hpp"
+#include "vcar/algo/robust_sphere.hpp"
+#include "vcar/core/gaussian_scene.hpp"
+#include "vcar/core/parallel.hpp"
+
+namespace vcar {
+
+struct CoplanarParams {
+  float radius = 0.f;       // c_r: neighbourhood radius as a fraction of the selection's extent D (0 = off)
+  float angle_deg = 5.f;    // alpha: largest angle between the two normals
+  float slab = 1.f;         // k_t: plane distance allowed, in thicknesses t_i + t_q
+  float min_flatness = 0.5f;  // phi_min: flatness below which a Gaussian has no plane
+  float edge_cos = 0.5f;      // cos beta: a seen selected disc at least beta from i's plane is edge-on
+  float edge_sigma = 3.f;     // sigma_c: the extent along n_i within which an edge-on disc reaches the plane
+};
+
+namespace detail {
+
+struct PlanePoint {
+  Eigen::Vector3f mu, n;
+  float t = 0.f;
+  bool flat = false;
+  Eigen::Matrix3f A = Eigen::Matrix3f::Zero();  // columns s_d r_d: n^T Sigma n = |A^T n|^2
+};
+
+inline PlanePoint plane_point(const GaussianScene& scene, Index i, float min_flatness) {
+  const auto [n, phi] = Foreshortening::normal_and_flatness(scene, i);
+  const float t = std::exp(std::min({scene.log_scale[0][i], scene.log_scale[1][i], scene.log_scale[2][i]}));
+  PlanePoint p{scene.mu(i), n, t, phi >= min_flatness && std::isfinite(t)};
+  p.A = scene.R(i);
+  for (int d = 0; d < 3; ++d) p.A.col(d) *= std::exp(scene.log_scale[d][i]);
+  return p;
+}
+
+// The coplanarity test of Eq. R10 for a (candidate) and b (neighbour), within distance r.
+inline bool coplanar(const PlanePoint& a, const PlanePoint& b, float r, float cos_alpha, float slab) {
+  const Eigen::Vector3f d = b.mu - a.mu;
+  return d.squaredNorm() <= r * r && std::abs(a.n.dot(b.n)) >= cos_alpha &&
+         std::abs(a.n.dot(d)) <= slab * (a.t + b.t);
+}
+
+// E_i of Eq. R10: b, a disc at least beta from a's plane, reaches it within edge_sigma of its
+// extent along a's normal (and lies within distance r).
+inline bool reaches_edge_on(const PlanePoint& a, const PlanePoint& b, float r, float edge_cos, float edge_sigma) {
+  const Eigen::Vector3f d = b.mu - a.mu;
+  if (d.squaredNorm() > r * r || std::abs(a.n.dot(b.n)) > edge_cos) return false;
+  const float h = a.n.dot(d);
+  return h * h <= edge_sigma * edge_sigma * (b.A.transpose() * a.n).squaredNorm();
+}
+
+}  // namespace detail
+
+// Eq. R10 on `selected` (ascending scene indices): the positions k into `selected` whose
+// Gaussian is background by R10, ascending. `seen(i)`: scene Gaussian i was seen unoccluded in
+// some training view. Deterministic for any thread count.
+template <class Seen>
+std::vector<std::size_t> coplanar_background(const GaussianScene& scene, std::span<const Index> selected,
+                                             Seen&& seen, const CoplanarParams& p) {
+  std::vector<std::size_t> out;
+  if (!(p.radius > 0.f) || selected.empty()) return out;
+  const RobustCentre rc = robust_centre(scene, selected);
+  const float r = p.radius * rc.max_inlier_distance;
+  if (!(r > 0.f) || !std::isfinite(r)) return out;
+  const float cos_alpha = std::cos(p.angle_deg * 3.14159265358979f / 180.f);
+  auto is_selected = [&](Index i) { return std::binary_search(selected.begin(), selected.end(), i); };
+
+  // Seen flat Gaussians within D + r of the centre, in a dense grid of cells of side r / 2
+  // (counting sort, ascending scene index within a cell): a ball of radius r lies in the 5 x 5
+  // rows of 5 cells around its centre's cell.
+  const float reach = rc.max_inlier_distance + r, cell = 0.5f * r;
+  const int dim = static_cast<int>(std::ceil(2.f * reach / cell)) + 1;
+  const Eigen::Vector3f origin = rc.c - Eigen::Vector3f::Constant(reach);
+  auto cell_index = [&](const Eigen::Vector3f& m, int axis) {
+    return std::clamp(static_cast<int>(std::floor((m[axis] - origin[axis]) / cell)), 0, dim - 1);
+  };
+  auto flat_index = [&](int x, int y, int z) { return (static_cast<std::size_t>(z) * dim + y) * dim + x; };
+  std::vector<Index> members;
+  for (std::size_t i = 0; i < scene.size(); ++i) {
+    if ((scene.mu(i) - rc.c).squaredNorm() > reach * reach || !seen(static_cast<Index>(i))) continue;
+    if (detail::plane_point(scene, static_cast<Index>(i), p.min_flatness).flat) members.push_back(static_cast<Index>(i));
+  }
+  std::vector<std::uint32_t> start(static_cast<std::size_t>(dim) * dim * dim + 1, 0);
+  auto cell_of = [&](Index i) {
+    const Eigen::Vector3f m = scene.mu(i);
+    return flat_index(cell_index(m, 0), cell_index(m, 1), cell_index(m, 2));
+  };
+  for (Index i : members) ++start[cell_of(i) + 1];
+  for (std::size_t c = 1; c < start.size(); ++c) start[c] += start[c - 1];
+  std::vector<detail::PlanePoint> points(members.size());
+  std::vector<std::uint8_t> label(members.size());
+  {
+    std::vector<std::uint32_t> next(start.begin(), start.end() - 1);
+    for (Index i : members) {
+      const std::uint32_t e = next[cell_of(i)]++;
+      points[e] = detail::plane_point(scene, i, p.min_flatness);
+      label[e] = is_selected(i);
+    }
+  }
+
+  std::vector<std::uint8_t> drop(selected.size(), 0);
+  parallel_for(static_cast<std::int64_t>(selected.size()), [&](std::int64_t kk) {
+    const auto k = static_cast<std::size_t>(kk);
+    const Index i = selected[k];
+    if (seen(i)) return;  // (so i is not among the grid's points either)
+    const detail::PlanePoint a = detail::plane_point(scene, i, p.min_flatness);
+    if (!a.flat) return;
+    const int cx = cell_index(a.mu, 0), cy = cell_index(a.mu, 1), cz = cell_index(a.mu, 2);
+    const int x0 = std::max(cx - 2, 0), x1 = std::min(cx + 2, dim - 1);
+    long B = 0, S = 0;
+    for (int z = std::max(cz - 2, 0); z <= std::min(cz + 2, dim - 1); ++z)
+      for (int y = std::max(cy - 2, 0); y <= std::min(cy + 2, dim - 1); ++y)
+        for (std::uint32_t e = start[flat_index(x0, y, z)]; e < start[flat_index(x1, y, z) + 1]; ++e) {
+          if (detail::coplanar(a, points[e], r, cos_alpha, p.slab)) (label[e] ? S : B) += 1;
+          else if (label[e] && detail::reaches_edge_on(a, points[e], r, p.edge_cos, p.edge_sigma)) S += 1;
+        }
+    drop[k] = B > S;                                                                      // Eq. R10
+  });
+  for (std::size_t k = 0; k < selected.size(); ++k)
+    if (drop[k]) out.push_back(k);
+  return out;
+}
+
+}  // namespace vcar
