@@ -476,6 +476,11 @@ std::string summary_text(const Diagnostics& d, const VcarParams& p, std::size_t 
     }
     s += "\n";
   }
+  if (p.coplanar_radius > 0.f && d.coplanar_dropped > 0) {  // Eq. R10 ran
+    std::snprintf(buf, sizeof buf, "hidden    %zu Gaussians dropped: unseen, on a seen background plane (Eq. R10)\n",
+                  d.coplanar_dropped);
+    s += buf;
+  }
   if (masks) {
     std::snprintf(buf, sizeof buf, "masks     %zu of %zu training views missing", masks->training_missing, masks->training);
     s += buf;

@@ -101,9 +101,9 @@ std::vector<std::size_t> coplanar_background(const GaussianScene& scene, std::sp
   const float cos_alpha = std::cos(p.angle_deg * 3.14159265358979f / 180.f);
   auto is_selected = [&](Index i) { return std::binary_search(selected.begin(), selected.end(), i); };
 
-  // Seen flat Gaussians within D + r of the centre, in a dense grid of cells of side r / 2
-  // (counting sort, ascending scene index within a cell): a ball of radius r lies in the 5 x 5
-  // rows of 5 cells around its centre's cell.
+  // Seen flat Gaussians within D + r of the centre, in two dense grids (background, selected)
+  // of cells of side r / 2 (counting sort, ascending scene index within a cell): a ball of
+  // radius r lies in the 5 x 5 rows of 5 cells around its centre's cell.
   const float reach = rc.max_inlier_distance + r, cell = 0.5f * r;
   const int dim = static_cast<int>(std::ceil(2.f * reach / cell)) + 1;
   const Eigen::Vector3f origin = rc.c - Eigen::Vector3f::Constant(reach);
@@ -111,45 +111,48 @@ std::vector<std::size_t> coplanar_background(const GaussianScene& scene, std::sp
     return std::clamp(static_cast<int>(std::floor((m[axis] - origin[axis]) / cell)), 0, dim - 1);
   };
   auto flat_index = [&](int x, int y, int z) { return (static_cast<std::size_t>(z) * dim + y) * dim + x; };
-  std::vector<Index> members;
+  struct Grid {
+    std::vector<std::uint32_t> start;
+    std::vector<detail::PlanePoint> points;
+  };
+  std::vector<Index> members[2];  // [0] background, [1] selected
   for (std::size_t i = 0; i < scene.size(); ++i) {
     if ((scene.mu(i) - rc.c).squaredNorm() > reach * reach || !seen(static_cast<Index>(i))) continue;
-    if (detail::plane_point(scene, static_cast<Index>(i), p.min_flatness).flat) members.push_back(static_cast<Index>(i));
+    if (detail::plane_point(scene, static_cast<Index>(i), p.min_flatness).flat)
+      members[is_selected(static_cast<Index>(i))].push_back(static_cast<Index>(i));
   }
-  std::vector<std::uint32_t> start(static_cast<std::size_t>(dim) * dim * dim + 1, 0);
-  auto cell_of = [&](Index i) {
-    const Eigen::Vector3f m = scene.mu(i);
-    return flat_index(cell_index(m, 0), cell_index(m, 1), cell_index(m, 2));
+  auto cell_of = [&](const Eigen::Vector3f& m) { return flat_index(cell_index(m, 0), cell_index(m, 1), cell_index(m, 2)); };
+  Grid grid[2];
+  for (int g = 0; g < 2; ++g) {
+    grid[g].start.assign(static_cast<std::size_t>(dim) * dim * dim + 1, 0);
+    for (Index i : members[g]) ++grid[g].start[cell_of(scene.mu(i)) + 1];
+    for (std::size_t c = 1; c < grid[g].start.size(); ++c) grid[g].start[c] += grid[g].start[c - 1];
+    grid[g].points.resize(members[g].size());
+    std::vector<std::uint32_t> next(grid[g].start.begin(), grid[g].start.end() - 1);
+    for (Index i : members[g]) grid[g].points[next[cell_of(scene.mu(i))]++] = detail::plane_point(scene, i, p.min_flatness);
+  }
+  // f(point) for every point of grid g in the cells within r of a.
+  auto for_each_near = [&](const Grid& g, const detail::PlanePoint& a, auto&& f) {
+    const int cx = cell_index(a.mu, 0), cy = cell_index(a.mu, 1), cz = cell_index(a.mu, 2);
+    const int x0 = std::max(cx - 2, 0), x1 = std::min(cx + 2, dim - 1);
+    for (int z = std::max(cz - 2, 0); z <= std::min(cz + 2, dim - 1); ++z)
+      for (int y = std::max(cy - 2, 0); y <= std::min(cy + 2, dim - 1); ++y)
+        for (std::uint32_t e = g.start[flat_index(x0, y, z)]; e < g.start[flat_index(x1, y, z) + 1]; ++e) f(g.points[e]);
   };
-  for (Index i : members) ++start[cell_of(i) + 1];
-  for (std::size_t c = 1; c < start.size(); ++c) start[c] += start[c - 1];
-  std::vector<detail::PlanePoint> points(members.size());
-  std::vector<std::uint8_t> label(members.size());
-  {
-    std::vector<std::uint32_t> next(start.begin(), start.end() - 1);
-    for (Index i : members) {
-      const std::uint32_t e = next[cell_of(i)]++;
-      points[e] = detail::plane_point(scene, i, p.min_flatness);
-      label[e] = is_selected(i);
-    }
-  }
 
   std::vector<std::uint8_t> drop(selected.size(), 0);
   parallel_for(static_cast<std::int64_t>(selected.size()), [&](std::int64_t kk) {
     const auto k = static_cast<std::size_t>(kk);
     const Index i = selected[k];
-    if (seen(i)) return;  // (so i is not among the grid's points either)
+    if (seen(i)) return;  // (so i is in neither grid)
     const detail::PlanePoint a = detail::plane_point(scene, i, p.min_flatness);
     if (!a.flat) return;
-    const int cx = cell_index(a.mu, 0), cy = cell_index(a.mu, 1), cz = cell_index(a.mu, 2);
-    const int x0 = std::max(cx - 2, 0), x1 = std::min(cx + 2, dim - 1);
     long B = 0, S = 0;
-    for (int z = std::max(cz - 2, 0); z <= std::min(cz + 2, dim - 1); ++z)
-      for (int y = std::max(cy - 2, 0); y <= std::min(cy + 2, dim - 1); ++y)
-        for (std::uint32_t e = start[flat_index(x0, y, z)]; e < start[flat_index(x1, y, z) + 1]; ++e) {
-          if (detail::coplanar(a, points[e], r, cos_alpha, p.slab)) (label[e] ? S : B) += 1;
-          else if (label[e] && detail::reaches_edge_on(a, points[e], r, p.edge_cos, p.edge_sigma)) S += 1;
-        }
+    for_each_near(grid[0], a, [&](const detail::PlanePoint& q) { B += detail::coplanar(a, q, r, cos_alpha, p.slab); });
+    if (B == 0) return;  // no seen background plane: kept, whatever S
+    for_each_near(grid[1], a, [&](const detail::PlanePoint& q) {
+      S += detail::coplanar(a, q, r, cos_alpha, p.slab) || detail::reaches_edge_on(a, q, r, p.edge_cos, p.edge_sigma);
+    });
     drop[k] = B > S;                                                                      // Eq. R10
   });
   for (std::size_t k = 0; k < selected.size(); ++k)

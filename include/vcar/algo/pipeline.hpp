@@ -418,7 +418,9 @@ bool refine(const GaussianScene& scene, const std::vector<Camera>& train_cameras
 
   // ---- Beyond the paper: hidden candidates on a seen background plane (Eq. R10), from the
   // coarse round's occlusion test over the whole scene (coarse_seen: V^o per scene Gaussian).
-  if (params.coplanar_radius > 0.f && !coarse_seen.empty()) {
+  // Not after a split fine vote (Eq. R7): masks that undershoot label the object's own seen
+  // rim background, and R10 would carry that label into the hidden part of its planes.
+  if (params.coplanar_radius > 0.f && !coarse_seen.empty() && !split) {
     const auto tc = Clock::now();
     const CoplanarParams cp{params.coplanar_radius, params.coplanar_angle_deg, params.coplanar_slab};
     const std::vector<std::size_t> drop =
