@@ -219,7 +219,8 @@ MultiSegmentation segment_objects(const GaussianScene& scene, const std::vector<
     vcar::detail::refine_from_coarse(
         scene, train_cameras, objects[o].prompt, renderer, one, params, progress, t_start, train_masks[o],
         [&](float tau, std::vector<Index>& selected, std::vector<float>& scores) { votes[o]->selected(tau, selected, scores); },
-        out.objects[o], "fine round (" + objects[o].name + ")");
+        out.objects[o], "fine round (" + objects[o].name + ")",
+        votes[o]->occlusion() ? votes[o]->unoccluded_views() : std::span<const std::uint16_t>{});
     votes[o].reset();  // its counters are not needed any more
     out.objects[o].diagnostics.timings_s.emplace_back("total", seconds_since(to));
   }
