@@ -114,6 +114,7 @@ std::vector<std::size_t> coplanar_background(const GaussianScene& scene, std::sp
   struct Grid {
     std::vector<std::uint32_t> start;
     std::vector<detail::PlanePoint> points;
+    float t_max = 0.f, s_max = 0.f;  // largest thickness, largest scale of its points
   };
   std::vector<Index> members[2];  // [0] background, [1] selected
   for (std::size_t i = 0; i < scene.size(); ++i) {
@@ -129,15 +130,28 @@ std::vector<std::size_t> coplanar_background(const GaussianScene& scene, std::sp
     for (std::size_t c = 1; c < grid[g].start.size(); ++c) grid[g].start[c] += grid[g].start[c - 1];
     grid[g].points.resize(members[g].size());
     std::vector<std::uint32_t> next(grid[g].start.begin(), grid[g].start.end() - 1);
-    for (Index i : members[g]) grid[g].points[next[cell_of(scene.mu(i))]++] = detail::plane_point(scene, i, p.min_flatness);
+    for (Index i : members[g]) {
+      detail::PlanePoint& q = grid[g].points[next[cell_of(scene.mu(i))]++];
+      q = detail::plane_point(scene, i, p.min_flatness);
+      grid[g].t_max = std::max(grid[g].t_max, q.t);
+      for (int d = 0; d < 3; ++d) grid[g].s_max = std::max(grid[g].s_max, q.A.col(d).norm());
+    }
   }
-  // f(point) for every point of grid g in the cells within r of a.
-  auto for_each_near = [&](const Grid& g, const detail::PlanePoint& a, auto&& f) {
+  // f(point) for every point of grid g in the cells within r of a that meet the slab
+  // |n_a . (x - mu_a)| <= w (the cell's box: centre c, |n_a . (x - c)| <= cell / 2 sum_d |n_a,d|;
+  // a point of a skipped cell lies farther from a's plane than w, by a margin for rounding).
+  auto for_each_near = [&](const Grid& g, const detail::PlanePoint& a, float w, auto&& f) {
     const int cx = cell_index(a.mu, 0), cy = cell_index(a.mu, 1), cz = cell_index(a.mu, 2);
-    const int x0 = std::max(cx - 2, 0), x1 = std::min(cx + 2, dim - 1);
+    const float half = 0.5f * cell * (std::abs(a.n.x()) + std::abs(a.n.y()) + std::abs(a.n.z())) * 1.001f + w;
+    const float h0 = a.n.dot(origin - a.mu + Eigen::Vector3f::Constant(0.5f * cell));  // cell (0, 0, 0)'s centre
     for (int z = std::max(cz - 2, 0); z <= std::min(cz + 2, dim - 1); ++z)
       for (int y = std::max(cy - 2, 0); y <= std::min(cy + 2, dim - 1); ++y)
-        for (std::uint32_t e = g.start[flat_index(x0, y, z)]; e < g.start[flat_index(x1, y, z) + 1]; ++e) f(g.points[e]);
+        for (int x = std::max(cx - 2, 0); x <= std::min(cx + 2, dim - 1); ++x) {
+          const float h = h0 + cell * (a.n.x() * static_cast<float>(x) + a.n.y() * static_cast<float>(y) + a.n.z() * static_cast<float>(z));
+          if (std::abs(h) > half) continue;
+          const std::size_t c = flat_index(x, y, z);
+          for (std::uint32_t e = g.start[c]; e < g.start[c + 1]; ++e) f(g.points[e]);
+        }
   };
 
   std::vector<std::uint8_t> drop(selected.size(), 0);
@@ -148,9 +162,13 @@ std::vector<std::size_t> coplanar_background(const GaussianScene& scene, std::sp
     const detail::PlanePoint a = detail::plane_point(scene, i, p.min_flatness);
     if (!a.flat) return;
     long B = 0, S = 0;
-    for_each_near(grid[0], a, [&](const detail::PlanePoint& q) { B += detail::coplanar(a, q, r, cos_alpha, p.slab); });
+    // Coplanar points lie within slab (t_a + t_max) of a's plane, edge-on ones that reach it
+    // within edge_sigma times their largest scale.
+    for_each_near(grid[0], a, p.slab * (a.t + grid[0].t_max),
+                  [&](const detail::PlanePoint& q) { B += detail::coplanar(a, q, r, cos_alpha, p.slab); });
     if (B == 0) return;  // no seen background plane: kept, whatever S
-    for_each_near(grid[1], a, [&](const detail::PlanePoint& q) {
+    const float w1 = std::max(p.slab * (a.t + grid[1].t_max), p.edge_sigma * grid[1].s_max);
+    for_each_near(grid[1], a, w1, [&](const detail::PlanePoint& q) {
       S += detail::coplanar(a, q, r, cos_alpha, p.slab) || detail::reaches_edge_on(a, q, r, p.edge_cos, p.edge_sigma);
     });
     drop[k] = B > S;                                                                      // Eq. R10
