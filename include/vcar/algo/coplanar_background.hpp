@@ -25,8 +25,10 @@
 // the whole scene): seen unoccluded in at least one training view. A flat object lying on a
 // table is seen, so it is never dropped; curved surfaces have no coplanar neighbours beyond a
 // few of their own.
-// Cost: one pass over the scene for the region around the selection, a dense grid of cell r_c / 2
-// over its seen flat Gaussians, and for each hidden flat candidate the 125 cells around it.
+// Cost: one pass over the scene for the region around the selection, two dense grids of cell
+// r_c / 2 over its seen flat Gaussians (background, selected), and for each hidden flat
+// candidate the cells within r_c that its plane's slab meets (the selected grid only when the
+// background one holds a coplanar point).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
