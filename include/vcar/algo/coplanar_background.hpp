@@ -118,23 +118,22 @@ std::vector<std::size_t> coplanar_background(const GaussianScene& scene, std::sp
     std::vector<detail::PlanePoint> points;
     float t_max = 0.f, s_max = 0.f;  // largest thickness, largest scale of its points
   };
-  std::vector<Index> members[2];  // [0] background, [1] selected
+  std::vector<detail::PlanePoint> members[2];  // [0] background, [1] selected, ascending index
   for (std::size_t i = 0; i < scene.size(); ++i) {
     if ((scene.mu(i) - rc.c).squaredNorm() > reach * reach || !seen(static_cast<Index>(i))) continue;
-    if (detail::plane_point(scene, static_cast<Index>(i), p.min_flatness).flat)
-      members[is_selected(static_cast<Index>(i))].push_back(static_cast<Index>(i));
+    detail::PlanePoint q = detail::plane_point(scene, static_cast<Index>(i), p.min_flatness);
+    if (q.flat) members[is_selected(static_cast<Index>(i))].push_back(std::move(q));
   }
   auto cell_of = [&](const Eigen::Vector3f& m) { return flat_index(cell_index(m, 0), cell_index(m, 1), cell_index(m, 2)); };
   Grid grid[2];
   for (int g = 0; g < 2; ++g) {
     grid[g].start.assign(static_cast<std::size_t>(dim) * dim * dim + 1, 0);
-    for (Index i : members[g]) ++grid[g].start[cell_of(scene.mu(i)) + 1];
+    for (const detail::PlanePoint& q : members[g]) ++grid[g].start[cell_of(q.mu) + 1];
     for (std::size_t c = 1; c < grid[g].start.size(); ++c) grid[g].start[c] += grid[g].start[c - 1];
     grid[g].points.resize(members[g].size());
     std::vector<std::uint32_t> next(grid[g].start.begin(), grid[g].start.end() - 1);
-    for (Index i : members[g]) {
-      detail::PlanePoint& q = grid[g].points[next[cell_of(scene.mu(i))]++];
-      q = detail::plane_point(scene, i, p.min_flatness);
+    for (const detail::PlanePoint& q : members[g]) {
+      grid[g].points[next[cell_of(q.mu)]++] = q;
       grid[g].t_max = std::max(grid[g].t_max, q.t);
       for (int d = 0; d < 3; ++d) grid[g].s_max = std::max(grid[g].s_max, q.A.col(d).norm());
     }
