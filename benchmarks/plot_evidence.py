@@ -25,7 +25,8 @@ RIGS = ["forward", "orbit", "sparse", "hemisphere"]
 PEERS = ["naive", "sagd", "flashsplat", "gaussiancut", "ludvig", "lbg"]
 VARIANTS = ["coarse", "sss", "abr", "full", "occlusion", "gapdir", "robust"]
 ROBUST_ABLATION = ["robust-band", "robust-noocc", "robust-nokeep", "robust-lowpass", "robust-tau08", "robust-nofs",
-                   "robust-noundershoot", "robust-nostrict", "robust-noabru", "robust-nocoarse2", "robust-nocoplanar"]
+                   "robust-noundershoot", "robust-nostrict", "robust-noabru", "robust-nocoarse2", "robust-nocoplanar",
+                   "robust-nogate"]
 TARGETS = ["sphere", "torus", "cylinder", "box"]
 NUM = {"seed", "gaussians", "object_gaussians", "level", "width", "height", "n_train", "n_eval", "miou", "macc",
        "miou_01", "macc_01", "boundary_iou", "boundary_f1", "trimap_iou", "f1_3d", "precision_3d", "recall_3d",
@@ -82,7 +83,8 @@ def label(key):
             "vcar:robust-nostrict": "robust - decisive threshold (R7)",
             "vcar:robust-noabru": "robust - undershoot ABR (R8)",
             "vcar:robust-nocoarse2": "robust - second coarse threshold (R9)",
-            "vcar:robust-nocoplanar": "robust - hidden on a background plane (R10)"}.get(key, key)
+            "vcar:robust-nocoplanar": "robust - hidden on a background plane (R10)",
+            "vcar:robust-nogate": "robust - R6's gate (R6c)"}.get(key, key)
 
 
 STYLE = {}

@@ -465,6 +465,7 @@ std::string summary_text(const Diagnostics& d, const VcarParams& p, std::size_t 
     std::snprintf(buf, sizeof buf, "fine vote %s: tau %.2f", d.tau_fine_applied < p.tau_strict ? "split" : "decisive",
                   static_cast<double>(d.tau_fine_applied));
     s += buf;
+    if (d.undershoot_applied) s += ", undershoot band on (Eq. R6)";
     if (p.tau_coarse_split > 0.f && d.tau_coarse_applied == p.tau_coarse_split) {  // Eq. R9 ran
       std::snprintf(buf, sizeof buf, "; stages 2-3 again from the coarse vote at tau %.2f",
                     static_cast<double>(d.tau_coarse_applied));
@@ -546,6 +547,7 @@ nlohmann::json write_segmentation(const std::filesystem::path& out, const Gaussi
       {"gap_direction", {d.gap_direction.x(), d.gap_direction.y(), d.gap_direction.z()}},
       {"sss_triggered", d.sss_triggered},
       {"tau_fine_applied", d.tau_fine_applied},
+      {"undershoot_applied", d.undershoot_applied},
       {"tau_coarse_applied", d.tau_coarse_applied},
       {"sphere", {{"center", {d.sphere.c.x(), d.sphere.c.y(), d.sphere.c.z()}}, {"radius", d.sphere.r},
                   {"inliers", d.sphere.inliers}}},

@@ -77,6 +77,7 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
   CHECK(r.keep_unseen);
   CHECK(r.foreshortening);
   CHECK(r.undershoot_band > 0.f);
+  CHECK(r.undershoot_gate);  // R6c
   CHECK(r.tau_strict > r.tau_fine);
   CHECK_FALSE(r.abr_lowpass);
   CHECK(r.abr_undershoot);  // R8
@@ -90,6 +91,7 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
     CHECK(p.edge_band == 0.f);
     CHECK_FALSE(p.foreshortening);
     CHECK(p.undershoot_band == 0.f);
+    CHECK_FALSE(p.undershoot_gate);
     CHECK(p.tau_strict <= p.tau_fine);  // Eq. R7 off
     CHECK(p.abr_lowpass);
     CHECK_FALSE(p.abr_undershoot);

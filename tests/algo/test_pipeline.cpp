@@ -303,6 +303,10 @@ TEST_CASE("Eq. R8: ABR reads the training masks widened by their undershoot only
   const vcar::Diagnostics exact = run(0);
   REQUIRE(exact.tau_fine_applied == p.tau_strict);
   CHECK(exact.abr_masks_widened == 0);
+  // Eq. R6c: the vote without R6 splits on eroded masks, so R6 shapes the result; on exact
+  // masks it is decisive and is the result.
+  CHECK(eroded.undershoot_applied);
+  CHECK(!exact.undershoot_applied);
   // Switched off, or in the paper's preset: never.
   p.abr_undershoot = false;
   CHECK(run(5).abr_masks_widened == 0);
@@ -349,6 +353,20 @@ TEST_CASE("Eq. R8: ABR reads the training masks widened by their undershoot only
   auto nv = vcar::VcarParams::nvos();
   nv.force_fine_round = true;
   CHECK(full(5, nv).diagnostics.tau_coarse_applied == nv.tau_coarse);
+  CHECK(!full(5, nv).diagnostics.undershoot_applied);
+
+  // Eq. R6c: a decisive vote without R6 gives the selection of a run without R6, bit for bit;
+  // a split one the selection of a run without the gate.
+  vcar::VcarParams no_r6 = p, ungated = p;
+  no_r6.undershoot_band = 0.f;
+  ungated.undershoot_gate = false;
+  const vcar::SegmentationResult g0 = full(0, p), n0 = full(0, no_r6);
+  CHECK(g0.indices == n0.indices);
+  CHECK(g0.scores == n0.scores);
+  const vcar::SegmentationResult g5 = full(5, p), u5 = full(5, ungated);
+  CHECK(g5.indices == u5.indices);
+  CHECK(g5.scores == u5.scores);
+  CHECK(full(0, ungated).diagnostics.undershoot_applied);
 }
 
 TEST_CASE("pipeline: bad input and edge cases") {

@@ -95,6 +95,10 @@ struct VcarParams {
   // mask are no evidence, e_j the mask's undershoot measured against the render of G_coarse;
   // 0 = off.
   float undershoot_band = 0.f;
+  // Eq. R6c (R6's gate): R7 reads the fine vote without R6 first, and R6 decides only where
+  // that vote is split (masks that undershoot); a decisive vote without it is the result.
+  // Inert without undershoot_band and tau_strict.
+  bool undershoot_gate = false;
   // Eq. R7: the fine round keeps tau_strict instead of tau_fine when the vote is decisive, i.e.
   // when at most a fraction split_fraction of the Gaussians kept at tau_fine fall below
   // tau_strict; tau_strict <= tau_fine (0) = off.
@@ -149,11 +153,12 @@ struct VcarParams {
   // vcar's default (beyond the paper, docs/robust.md): tau_coarse 0.5, tau_fine 0.5, the
   // evidence levels (R2) with the occlusion test in both rounds (R3), unseen fine candidates kept
   // (R4), views weighted by foreshortening (R5), the fine round's band as wide as the masks'
-  // measured undershoot (R6), the strict threshold 0.85 when the fine vote is decisive (R7),
-  // ABR on masks widened by their undershoot when it is split (R8), stages 2-3 again from the
-  // coarse vote at 0.3 when it is split (R9), hidden candidates on a seen background plane
-  // dropped (R10), and ABR on the Gaussians' own footprints. The edge band (R1) is off: R6-R7 do its work
-  // (docs/results.md, ablation). What vcar::segment uses when given no parameters.
+  // measured undershoot (R6) where the vote without it splits (R6c), the strict threshold 0.85
+  // when the fine vote is decisive (R7), ABR on masks widened by their undershoot when it is
+  // split (R8), stages 2-3 again from the coarse vote at 0.3 when it is split (R9), hidden
+  // candidates on a seen background plane dropped (R10), and ABR on the Gaussians' own
+  // footprints. The edge band (R1) is off: R6-R7 do its work (docs/results.md, ablation). What
+  // vcar::segment uses when given no parameters.
   static VcarParams robust() {
     VcarParams p;
     p.tau_fine = 0.5f;
@@ -162,6 +167,7 @@ struct VcarParams {
     p.keep_unseen = true;
     p.foreshortening = true;
     p.undershoot_band = 1.5f;
+    p.undershoot_gate = true;
     p.tau_strict = 0.85f;
     p.split_fraction = 0.1f;
     p.abr_undershoot = true;
@@ -215,6 +221,7 @@ struct VcarParams {
     f("fine_occlusion", p.fine_occlusion); f("coarse_occlusion", p.coarse_occlusion);
     f("keep_unseen", p.keep_unseen); f("keep_undecided", p.keep_undecided); f("kappa", p.kappa);
     f("foreshortening", p.foreshortening); f("undershoot_band", p.undershoot_band);
+    f("undershoot_gate", p.undershoot_gate);
     f("tau_strict", p.tau_strict); f("split_fraction", p.split_fraction); f("abr_lowpass", p.abr_lowpass);
     f("abr_undershoot", p.abr_undershoot); f("tau_coarse_split", p.tau_coarse_split);
     f("coplanar_radius", p.coplanar_radius); f("coplanar_angle_deg", p.coplanar_angle_deg);

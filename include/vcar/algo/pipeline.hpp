@@ -62,6 +62,7 @@ struct Diagnostics {
   Eigen::Vector3f gap_direction = Eigen::Vector3f::Zero();
   bool sss_triggered = false;
   float tau_fine_applied = 0.f;     // the fine round's threshold (Eq. R7: tau_fine or tau_strict); 0: no fine round
+  bool undershoot_applied = false;  // Eq. R6 shaped the fine vote (on, and its gate R6c found the vote without it split)
   float tau_coarse_applied = 0.f;   // the coarse threshold of the selection the result comes from (Eq. R9:
                                     // tau_coarse, or tau_coarse_split after a split fine vote)
   std::vector<Camera> sampled_cameras;  // V_sampled
@@ -187,7 +188,7 @@ class RoundVote {
 public:
   RoundVote(const GaussianScene& scene, const std::vector<Index>* candidates, const VcarParams& p, bool fine)
       : occlusion_(p.occlusion_aware || (fine ? p.fine_occlusion : p.coarse_occlusion)),
-        undershoot_(fine && p.undershoot_band > 0.f),
+        undershoot_(fine && p.undershoot_band > 0.f), gated_(undershoot_ && p.undershoot_gate),
         undecided_kept_(!fine && p.keep_undecided), keep_unseen_(fine && p.keep_unseen) {
     if (p.robust_vote()) {
       // Eq. R6 needs frames rendered from the candidates alone: the fine round's.
@@ -219,26 +220,42 @@ public:
     else paper_->add_view(cam, m);
   }
   // Eq. 3 (paper) or Eq. R2-R6 (robust): ascending scene indices and their scores.
-  void selected(float tau, std::vector<Index>& indices, std::vector<float>& scores) const {
-    if (robust_) return robust_->selected(tau, undecided_kept_, keep_unseen_, indices, scores);
+  // undershoot = false: the vote without Eq. R6's widening (RobustVoting::ratio).
+  void selected(float tau, std::vector<Index>& indices, std::vector<float>& scores, bool undershoot = true) const {
+    if (robust_) return robust_->selected(tau, undecided_kept_, keep_unseen_, indices, scores, undershoot);
     paper_->selected(tau, indices, scores);
   }
   // The same with Eq. R7 choosing between tau and tau_strict (> tau; else tau); returns the
-  // threshold applied.
+  // threshold applied. With R6's gate, R7 reads the vote without R6 first: when that vote is
+  // decisive it is the result; when it splits, the vote with R6 decides as above (Eq. R6c).
   float selected(float tau, float tau_strict, float split, std::vector<Index>& indices, std::vector<float>& scores) const {
-    selected(tau, indices, scores);
+    undershoot_applied_ = undershoot_;
+    if (gated_ && tau_strict > tau && decided(tau, tau_strict, split, indices, scores, false) == tau_strict) {
+      undershoot_applied_ = false;                                                           // Eq. R6c
+      return tau_strict;
+    }
+    return decided(tau, tau_strict, split, indices, scores, true);
+  }
+  // Whether Eq. R6 shaped the latest selected(tau, tau_strict, ...) (false when its gate found
+  // the vote without it decisive).
+  bool undershoot_applied() const { return undershoot_applied_; }
+
+private:
+  float decided(float tau, float tau_strict, float split, std::vector<Index>& indices, std::vector<float>& scores,
+                bool undershoot) const {
+    selected(tau, indices, scores, undershoot);
     if (!(tau_strict > tau)) return tau;
     std::vector<Index> strict;
     std::vector<float> strict_scores;
-    selected(tau_strict, strict, strict_scores);
+    selected(tau_strict, strict, strict_scores, undershoot);
     if (!decisive_vote(strict.size(), indices.size(), split)) return tau;                   // Eq. R7
     indices = std::move(strict);
     scores = std::move(strict_scores);
     return tau_strict;
   }
 
-private:
-  bool occlusion_, undershoot_, undecided_kept_, keep_unseen_;
+  bool occlusion_, undershoot_, gated_, undecided_kept_, keep_unseen_;
+  mutable bool undershoot_applied_ = false;
   std::optional<VisibilityVoting> paper_;
   std::optional<RobustVoting> robust_;
 };
@@ -409,6 +426,7 @@ bool refine(const GaussianScene& scene, const std::vector<Camera>& train_cameras
     timing("fine_voting", t2.voting);
     diag.tau_fine_applied = fine.selected(params.tau_fine, params.tau_strict, params.split_fraction, selected, scores);
     split = diag.tau_fine_applied < params.tau_strict;  // R7 found the vote split
+    diag.undershoot_applied = fine.undershoot_applied();
     diag.n_fine = diag.n_final = selected.size();
     if (selected.empty()) {
       diag.note = "the fine vote kept no Gaussian (tau_fine too high for these masks?)";

@@ -25,7 +25,11 @@
 //                   level; 16 more bytes per candidate for the sums, 16 for phi_i n_i, 1 - phi_i;
 //   gamma (Eq. R6, undershoot.hpp): in a round whose frames are renders of the candidates, the
 //                   background pixels within max(w_j, gamma e_j) of the mask are unsure, e_j the
-//                   mask's undershoot measured against the render's alpha.
+//                   mask's undershoot measured against the render's alpha. Such a vote also
+//                   holds its sure level without R6's widening (R1's band alone; the unoccluded
+//                   level itself when the band is off, at no cost), so that Eq. R7 can read the
+//                   vote as it would be without R6 (R6's gate, docs/robust.md): ratio(k, false);
+//                   4 more bytes per candidate (12 with R5) when R1 and R6 are both on.
 // Two exceptions, each a switch of selected():
 //   undecided_kept: a Gaussian seen unoccluded but only inside bands (V^o > 0 = V^s) is kept
 //                   (the coarse round passes it on to the fine round, which decides);
@@ -102,6 +106,7 @@ public:
     ++views_;
     const std::uint8_t* sure_fg = mask->data.data();
     const std::uint8_t* sure = nullptr;  // null: every pixel is sure
+    const std::uint8_t* sure_band = nullptr;  // R1's band alone, when R6 widens it (c1_ held)
     if (!(o_.kappa >= 0.f)) throw Error("kappa must be >= 0", "voting");
     int w = 0;
     if (o_.beta > 0.f) {
@@ -112,6 +117,8 @@ public:
       sure_fg = band_.sure_foreground.data.data();
       sure = band_.sure.data.data();
     }
+    const bool band_level = !c1_[0].empty();
+    if (band_level) sure_band = sure;
     if (o_.gamma > 0.f && alpha) {
       last_undershoot_ = undershoot_px(*mask, *alpha);                                     // Eq. R6a
       const double reach = std::max<double>(w, o_.gamma * last_undershoot_);               // Eq. R6b
@@ -147,7 +154,12 @@ public:
           ++c_[2][i]; c_[3][i] = static_cast<std::uint16_t>(c_[3][i] + f);
           const float omega = weighted ? fs_.weight(i, x_[i], y_[i], z_[i], C) : 1.f;        // Eq. R5
           if (weighted) { w_[0][i] += omega; w_[1][i] += f ? omega : 0.f; }
-          if (sure && !sure[p]) continue;                                                      // Eq. R1
+          if (band_level && (!sure_band || sure_band[p])) {                                    // Eq. R1 alone
+            const std::uint16_t g = sure_fg[p] != 0;
+            ++c1_[0][i]; c1_[1][i] = static_cast<std::uint16_t>(c1_[1][i] + g);
+            if (weighted) { w1_[0][i] += omega; w1_[1][i] += g ? omega : 0.f; }
+          }
+          if (sure && !sure[p]) continue;                                                      // Eq. R1, R6b
           ++c_[4][i]; c_[5][i] = static_cast<std::uint16_t>(c_[5][i] + (sure_fg[p] != 0));
           if (weighted) { w_[2][i] += omega; w_[3][i] += sure_fg[p] != 0 ? omega : 0.f; }
         }
@@ -170,7 +182,8 @@ public:
   double last_undershoot_px() const noexcept { return last_undershoot_; }
 
   // Eq. R2 (Eq. 3 at level 0), with Eq. R5's sums at levels 1-2 when foreshortening is on.
-  float ratio(std::size_t k) const {
+  // undershoot = false: the sure level without Eq. R6's widening (the vote R6's gate reads).
+  float ratio(std::size_t k, bool undershoot = true) const {
     float R = static_cast<float>(foreground(k)) / static_cast<float>(std::max<std::uint16_t>(visible(k), 1));
     // While R is the plain ratio of counts equal to this level's, the shrunk value equals R
     // exactly ((F + kappa F/V) / (V + kappa) = F/V): keep R bit for bit instead of rounding it
@@ -178,30 +191,37 @@ public:
     bool plain = true;
     const float kappa = o_.kappa;
     for (int level = 1; level <= 2; ++level) {
+      const bool own = level == 2 && !undershoot && o_.gamma > 0.f;  // R6 off: R1's band alone
+      const int at = own && c1_[0].empty() ? 1 : level;                 // band off: level 1's counts
       if (o_.foreshortening) {
-        const float V = weight(k, level), F = weighted_foreground(k, level);
+        const bool band = own && at == 2;
+        const float V = band ? w1_[0][k] : weight(k, at), F = band ? w1_[1][k] : weighted_foreground(k, at);
         if (V + kappa > 0.f) R = (F + kappa * R) / (V + kappa);
         continue;
       }
-      if (plain && visible(k, level) == visible(k) && foreground(k, level) == foreground(k)) continue;
+      const std::uint16_t Vc = own && at == 2 ? c1_[0][k] : visible(k, at);
+      const std::uint16_t Fc = own && at == 2 ? c1_[1][k] : foreground(k, at);
+      if (plain && Vc == visible(k) && Fc == foreground(k)) continue;
       plain = false;
-      const float V = static_cast<float>(visible(k, level)), F = static_cast<float>(foreground(k, level));
+      const float V = static_cast<float>(Vc), F = static_cast<float>(Fc);
       if (V + kappa > 0.f) R = (F + kappa * R) / (V + kappa);
     }
     return R;
   }
   // Eq. 3 / R2 / R4 for candidate k (the switches as at the top of the file).
-  bool kept(std::size_t k, float tau, bool undecided_kept, bool keep_unseen) const {
+  // undershoot = false: as ratio(k, false).
+  bool kept(std::size_t k, float tau, bool undecided_kept, bool keep_unseen, bool undershoot = true) const {
     if (keep_unseen && visible(k) == 0) return true;
-    if (undecided_kept && o_.beta > 0.f && visible(k, 2) == 0 && visible(k, 1) > 0) return true;
-    return ratio(k) >= tau;
+    const bool own = !undershoot && o_.gamma > 0.f && !c1_[0].empty();
+    if (undecided_kept && o_.beta > 0.f && (own ? c1_[0][k] : visible(k, 2)) == 0 && visible(k, 1) > 0) return true;
+    return ratio(k, undershoot) >= tau;
   }
-  // Scene indices (ascending) of the kept candidates, and their R_i.
+  // Scene indices (ascending) of the kept candidates, and their R_i (undershoot as in ratio()).
   void selected(float tau, bool undecided_kept, bool keep_unseen, std::vector<Index>& indices,
-                std::vector<float>& scores) const {
+                std::vector<float>& scores, bool undershoot = true) const {
     std::vector<std::pair<Index, float>> out;
     for (std::size_t k = 0; k < n_; ++k)
-      if (kept(k, tau, undecided_kept, keep_unseen)) out.push_back({candidate(k), ratio(k)});
+      if (kept(k, tau, undecided_kept, keep_unseen, undershoot)) out.push_back({candidate(k), ratio(k, undershoot)});
     std::sort(out.begin(), out.end());
     indices.clear();
     scores.clear();
@@ -216,6 +236,11 @@ private:
       fs_ = Foreshortening::of(scene, candidates_);
       for (auto& c : w_) c.assign(n, 0.f);
     }
+    if (o_.gamma > 0.f && o_.beta > 0.f) {  // R6 widens R1's band: keep R1's alone too
+      for (auto& c : c1_) c.assign(n, 0);
+      if (o_.foreshortening)
+        for (auto& c : w1_) c.assign(n, 0.f);
+    }
   }
 
   RobustVoteOptions o_;
@@ -226,6 +251,8 @@ private:
   std::array<std::vector<std::uint16_t>, 6> c_;  // V, F, V^o, F^o, V^s, F^s
   Foreshortening fs_;
   std::array<std::vector<float>, 4> w_;  // Eq. R5: weighted V^o, F^o, V^s, F^s
+  std::array<std::vector<std::uint16_t>, 2> c1_;  // V^s, F^s with R1's band alone (R6 on, band on)
+  std::array<std::vector<float>, 2> w1_;          // their Eq. R5 sums
   EdgeBandMasks band_;
   std::vector<std::uint8_t> outer_;      // Eq. R6b: the sure plane with the widened outer band
   double last_undershoot_ = 0;
