@@ -143,7 +143,7 @@ const std::vector<std::string> kVariants = {"coarse", "sss", "abr", "full", "occ
 // The robust preset with one mechanism changed each (docs/robust.md ablation): off, or for the
 // edge band R1 (off in robust) on.
 const std::vector<std::string> kRobustAblation = {"robust-band", "robust-noocc", "robust-nokeep",
-                                                  "robust-lowpass", "robust-tau08", "robust-nofs",
+                                                  "robust-nolowpass", "robust-tau08", "robust-nofs",
                                                   "robust-noundershoot", "robust-nostrict", "robust-noabru",
                                                   "robust-nocoarse2", "robust-nocoplanar", "robust-nogate"};
 
@@ -179,7 +179,7 @@ VcarParams vcar_params(const std::string& variant, const Experiment& e, const st
     if (variant == "robust-band") p.edge_band = 0.1f;
     else if (variant == "robust-noocc") p.fine_occlusion = false;
     else if (variant == "robust-nokeep") p.keep_unseen = false;
-    else if (variant == "robust-lowpass") p.abr_lowpass = true;
+    else if (variant == "robust-nolowpass") p.abr_lowpass = false;
     else if (variant == "robust-tau08") p.tau_fine = 0.8f;
     else if (variant == "robust-nofs") p.foreshortening = false;
     else if (variant == "robust-noundershoot") p.undershoot_band = 0.f;

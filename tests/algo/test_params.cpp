@@ -79,7 +79,7 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
   CHECK(r.undershoot_band > 0.f);
   CHECK(r.undershoot_gate);  // R6c
   CHECK(r.tau_strict > r.tau_fine);
-  CHECK_FALSE(r.abr_lowpass);
+  CHECK(r.abr_lowpass);  // as the paper; R8 reads own footprints after a split vote
   CHECK(r.abr_undershoot);  // R8
   CHECK(r.tau_coarse_split > 0.f);  // R9
   CHECK(r.tau_coarse_split < r.tau_coarse);

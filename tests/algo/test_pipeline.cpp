@@ -367,6 +367,17 @@ TEST_CASE("Eq. R8: ABR reads the training masks widened by their undershoot only
   CHECK(g5.indices == u5.indices);
   CHECK(g5.scores == u5.scores);
   CHECK(full(0, ungated).diagnostics.undershoot_applied);
+
+  // Eq. R8 reads the Gaussians' own footprints after a split vote, whatever abr_lowpass says.
+  vcar::VcarParams own = p, lowpass_r8_off = p;
+  own.abr_lowpass = false;
+  lowpass_r8_off.abr_undershoot = false;
+  const vcar::SegmentationResult s_own = full(5, own);
+  REQUIRE(p.abr_lowpass);
+  CHECK(g5.log_scale == s_own.log_scale);
+  vcar::VcarParams own_r8_off = lowpass_r8_off;
+  own_r8_off.abr_lowpass = false;
+  CHECK(full(5, lowpass_r8_off).log_scale != full(5, own_r8_off).log_scale);  // the low-pass matters here
 }
 
 TEST_CASE("pipeline: bad input and edge cases") {

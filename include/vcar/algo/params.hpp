@@ -109,10 +109,12 @@ struct VcarParams {
   // tau_strict; 0 = off.
   float tau_coarse_split = 0.f;
   // Eq. R8: when the fine vote is split (R7 kept tau_fine), ABR reads each training view's mask
-  // widened by its measured undershoot e_j (R6a). Needs undershoot_band > 0 and tau_strict.
+  // widened by its measured undershoot e_j (R6a), and the Gaussians' own footprints (no
+  // low-pass). Needs undershoot_band > 0 and tau_strict.
   bool abr_undershoot = false;
   // Eq. 9-13 read Sigma2D with the renderer's eps2d low-pass (conventions §3, true) or the
-  // Gaussian's own footprint (false: overflow within ~1.6 px no longer forces f_min).
+  // Gaussian's own footprint (false: overflow within ~1.6 px no longer forces f_min). Eq. R8
+  // reads the own footprint after a split fine vote whatever this says.
   bool abr_lowpass = true;
   // Eq. R10: a fine candidate that no training view sees (the coarse round's occlusion test) is
   // background when more seen background Gaussians than seen selected ones lie on its plane
@@ -155,10 +157,10 @@ struct VcarParams {
   // (R4), views weighted by foreshortening (R5), the fine round's band as wide as the masks'
   // measured undershoot (R6) where the vote without it splits (R6c), the strict threshold 0.85
   // when the fine vote is decisive (R7), ABR on masks widened by their undershoot when it is
-  // split (R8), stages 2-3 again from the coarse vote at 0.3 when it is split (R9), hidden
-  // candidates on a seen background plane dropped (R10), and ABR on the Gaussians' own
-  // footprints. The edge band (R1) is off: R6-R7 do its work (docs/results.md, ablation). What
-  // vcar::segment uses when given no parameters.
+  // split, on their own footprints (R8), stages 2-3 again from the coarse vote at 0.3 when it
+  // is split (R9), and hidden candidates on a seen background plane dropped (R10). The edge band
+  // (R1) is off: R6-R7 do its work (docs/results.md, ablation). What vcar::segment uses when
+  // given no parameters.
   static VcarParams robust() {
     VcarParams p;
     p.tau_fine = 0.5f;
@@ -172,7 +174,6 @@ struct VcarParams {
     p.split_fraction = 0.1f;
     p.abr_undershoot = true;
     p.tau_coarse_split = 0.3f;
-    p.abr_lowpass = false;
     p.coplanar_radius = 0.75f;
     return p;
   }

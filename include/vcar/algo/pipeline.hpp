@@ -462,7 +462,13 @@ bool refine(const GaussianScene& scene, const std::vector<Camera>& train_cameras
 
   // ---- Stage 3: ABR on the training views with masks from the latest round (Eq. 9-14, B).
   if (params.enable_abr) stage("abr");
-  if (params.abr_undershoot && params.enable_abr && split)
+  // Eq. R8 after a split fine vote: each training mask widened by its undershoot, and the
+  // Gaussians' own footprints (no low-pass: it would widen every ellipse past masks that are
+  // already too small).
+  const bool r8 = params.abr_undershoot && params.enable_abr && split;
+  VcarParams abr_params = params;
+  if (r8) abr_params.abr_lowpass = false;
+  if (r8)
     for (std::size_t j = 0; j < M; ++j)
       if (train_masks[j] && undershoot[j] > 0.0) {
         Mask m = train_masks[j]->decode();
@@ -470,7 +476,7 @@ bool refine(const GaussianScene& scene, const std::vector<Camera>& train_cameras
         train_masks[j] = RleMask::encode(m);
         ++diag.abr_masks_widened;
       }
-  result.log_scale = refine_boundaries(scene, selected, train_cameras, train_masks, params, diag);
+  result.log_scale = refine_boundaries(scene, selected, train_cameras, train_masks, abr_params, diag);
   result.indices = std::move(selected);
   result.scores = std::move(scores);
   diag.n_final = result.indices.size();
