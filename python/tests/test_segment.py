@@ -81,6 +81,10 @@ def test_oracle_identical_to_cli(cli_dataset, tmp_path, preset):
     assert d["abr_masks_widened"] == report["abr"]["masks_widened"]
     if preset != "robust" or d["tau_fine_applied"] != pytest.approx(0.5):
         assert d["abr_masks_widened"] == 0
+    # Eq. R6c: the undershoot band shapes the fine vote only in the robust preset's fine round.
+    assert d["undershoot_applied"] == report["undershoot_applied"]
+    if preset != "robust" or not fine_round:
+        assert not d["undershoot_applied"]
     # Eq. R10: hidden candidates on a seen background plane, dropped by the robust preset only.
     assert d["coplanar_dropped"] == report["coplanar_dropped"]
     if preset != "robust":
