@@ -271,3 +271,32 @@ TEST_CASE("Eq. R6c in the vote: ratio(k, false) is the vote without R6, bit for 
         }
     }
 }
+
+TEST_CASE("Eq. R6c by hand: ratio(k, false) reads the sure level without R6's widening") {
+  // Gaussian 0 at pixel (6, 10). View a: the mask [8, 12)^2 undershoots the render [5, 15)^2 by
+  // e = 3 px, so pixel (6, 10), 2 px out, is unsure with R6 (reach 3) and sure background
+  // without it. View b: a mask over the whole image (no contour: e = 0), foreground.
+  // V = V^o = 2, F = F^o = 1: R^0 = R^1 = 1/2 (kappa 2). With R6: V^s = 1, F^s = 1,
+  // R^2 = (1 + 2 * 1/2) / (1 + 2) = 2/3. Without: V^s = 2, F^s = 1, R^2 = 1/2.
+  const auto scene = scene_of({{-0.35f, 0.05f, 1}});
+  const Mask ma = square(8, 8, 12, 12), mb = square(0, 0, 20, 20);
+  ImageF alpha(20, 20, 1);
+  for (int y = 5; y < 15; ++y)
+    for (int x = 5; x < 15; ++x) alpha.data[static_cast<std::size_t>(y) * 20 + x] = 1.f;
+  vcar::RobustVoteOptions o;
+  o.gamma = 1.f;
+  vcar::RobustVoting v(scene, o);
+  v.add_view(cam20("a"), &ma, nullptr, &alpha);
+  v.add_view(cam20("b"), &mb, nullptr, &alpha);
+  CHECK(v.ratio(0) == Approx(2.f / 3.f));
+  CHECK(v.ratio(0, false) == Approx(0.5f));
+  // At tau 0.6 the Gaussian is kept with R6 and dropped without it.
+  CHECK(v.kept(0, 0.6f, false, false));
+  CHECK_FALSE(v.kept(0, 0.6f, false, false, false));
+  // gamma 0 (R6 off): both readings are the same vote.
+  vcar::RobustVoting off(scene, 0.f);
+  off.add_view(cam20("a"), &ma, nullptr, &alpha);
+  off.add_view(cam20("b"), &mb, nullptr, &alpha);
+  CHECK(off.ratio(0) == off.ratio(0, false));
+  CHECK(off.ratio(0) == Approx(0.5f));
+}
