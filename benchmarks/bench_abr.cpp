@@ -14,6 +14,7 @@
 #include <random>
 #include <vector>
 
+#include "vcar/core/simd.hpp"  // first: it keeps GCC 12 quiet about its own AVX-512 headers (bug 105593)
 #include <Eigen/Eigenvalues>
 
 #include "vcar/algo/boundary_refinement.hpp"

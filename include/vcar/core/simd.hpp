@@ -23,13 +23,16 @@
 
 #if !defined(VCAR_SIMD_SCALAR)
 // GCC 12's AVX-512 intrinsics read an "undefined" register on purpose and then warn about it
-// (-W(maybe-)uninitialized, GCC bug 105593, fixed in GCC 13) wherever they are inlined: the
-// warnings are silenced for xsimd and the wrappers below, so hosts building with -Wall see
-// none (when xsimd is first included through this header).
+// (-W(maybe-)uninitialized, GCC bug 105593, fixed in GCC 13) wherever they are inlined, and
+// Eigen's 512-bit stores in small fixed-size decompositions (<Eigen/Eigenvalues> on a 2 x 2)
+// trip -Warray-bounds in dead branches: the warnings are silenced for code in the intrinsic
+// headers, so hosts building with -Wall see none when those headers are first included
+// through this one (include a vcar header before <Eigen/...> or <immintrin.h>).
 #if defined(__GNUC__) && !defined(__clang__) && __GNUC__ == 12 && defined(__AVX512F__)
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wuninitialized"
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Warray-bounds"
 #define VCAR_SIMD_POP_DIAGNOSTICS 1
 #endif
 #include <xsimd/xsimd.hpp>
