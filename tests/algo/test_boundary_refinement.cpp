@@ -593,3 +593,53 @@ TEST_CASE("defer_tracing and refine_deferred: the flagged candidates left untrac
   deferring.defer_tracing();
   CHECK_THROWS_AS(next.carry(deferring), vcar::Error);  // partial minima cannot be carried
 }
+
+TEST_CASE("bound_minimum: a bound from some of the views leaves every minimum as a refinement over all views finds it") {
+  const RingFixture f = ring_fixture();
+  std::vector<vcar::Index> cand(f.scene.size());
+  for (std::size_t i = 0; i < cand.size(); ++i) cand[i] = static_cast<vcar::Index>(i);
+  vcar::AbrParams p;
+  p.rho = 0.f;
+  // The bound: minima over views 0, 2, 4 only (an upper bound of the minima over all six).
+  vcar::BoundaryRefinement some(f.scene, cand, p), full(f.scene, cand, p), bounded(f.scene, cand, p);
+  for (int v = 0; v < 6; v += 2) some.add_view(f.cams[v], f.masks[v]);
+  std::size_t finite = 0, tighter = 0;
+  for (std::size_t k = 0; k < cand.size(); ++k) {
+    const std::array<float, 3> b{some.min_factor(k, 0), some.min_factor(k, 1), some.min_factor(k, 2)};
+    bounded.bound_minimum(k, b);
+    for (int d = 0; d < 3; ++d) {
+      REQUIRE(bounded.min_factor(k, d) == b[d]);  // stored values are already clamped at f_min
+      finite += std::isfinite(b[d]);
+    }
+  }
+  CHECK(finite > 0);  // the bound says something
+  for (int v = 0; v < 6; ++v) {
+    full.add_view(f.cams[v], f.masks[v]);
+    bounded.add_view(f.cams[v], f.masks[v]);
+  }
+  for (std::size_t k = 0; k < cand.size(); ++k) {
+    REQUIRE(bounded.n_vis(k) == full.n_vis(k));
+    REQUIRE(bounded.n_ovf(k) == full.n_ovf(k));
+    for (int d = 0; d < 3; ++d) {
+      REQUIRE(bounded.min_factor(k, d) == full.min_factor(k, d));  // min over views, bit for bit
+      tighter += full.min_factor(k, d) < some.min_factor(k, d);
+    }
+  }
+  CHECK(tighter > 0);  // the other three views lowered some minima below the bound
+  const vcar::AbrResult a = bounded.finish(), ref = full.finish();
+  CHECK(a.log_scale == ref.log_scale);
+  CHECK(a.axis_compressed == ref.axis_compressed);
+  CHECK(a.compressed == ref.compressed);
+
+  // A bound below the true minimum is taken as given (the caller's promise): the result changes.
+  vcar::BoundaryRefinement wrong(f.scene, cand, p);
+  for (std::size_t k = 0; k < cand.size(); ++k) wrong.bound_minimum(k, {p.f_min, p.f_min, p.f_min});
+  for (int v = 0; v < 6; ++v) wrong.add_view(f.cams[v], f.masks[v]);
+  CHECK(wrong.finish().log_scale != ref.log_scale);
+
+  vcar::BoundaryRefinement started(f.scene, cand, p);
+  started.add_view(f.cams[0], f.masks[0]);
+  CHECK_THROWS_AS(started.bound_minimum(0, {1.f, 1.f, 1.f}), vcar::Error);  // before the first view only
+  vcar::BoundaryRefinement fresh(f.scene, cand, p);
+  CHECK_THROWS_AS(fresh.bound_minimum(cand.size(), {1.f, 1.f, 1.f}), vcar::Error);  // out of range
+}

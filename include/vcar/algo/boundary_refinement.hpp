@@ -312,6 +312,21 @@ class BoundaryRefinement {
     return out;
   }
 
+  // Beyond the paper (same result, shorter marches): an upper bound on candidate k's running
+  // minimum per axis (B.3, clamped below at f_min), e.g. min_factor() of an earlier refinement
+  // of the same candidate over some of the same views with the same parameters. Observing every
+  // view then ends at the same minimum (a minimum over views, and the bound is one of its
+  // terms), while an endpoint whose factor cannot beat the bound is never traced
+  // (observe_lane's `beat`). refine_deferred bounds its second pass with the first pass's
+  // minima. Call before the first view; not with carry (whose minima remember their views).
+  void bound_minimum(std::size_t k, const std::array<float, 3>& bound) {
+    if (views_ != 0) throw Error("bound_minimum is called before the first view", "BoundaryRefinement");
+    if (!mode_.empty()) throw Error("bound_minimum does not combine with carry", "BoundaryRefinement");
+    if (k >= size()) throw Error("bound_minimum: candidate position out of range", "BoundaryRefinement");
+    const std::size_t j = slot_[k];
+    for (int d = 0; d < 3; ++d) f_[d][j] = std::max(params_.f_min, std::min(f_[d][j], bound[d]));
+  }
+
   // Announces that exactly `total` views will be added (add_view), which lets the refinement
   // skip a candidate once its gate (B.3: gamma = n_ovf / n_vis > rho) can no longer open: with
   // R views to come, gamma ends at most (n_ovf + R) / (n_vis + R). finish() is unchanged (a
@@ -681,9 +696,10 @@ class BoundaryRefinement {
 
 // ABR (Eq. 9-14) of `candidates` over a sequence of views with the least tracing: one
 // BoundaryRefinement with expect_views and defer_tracing, then the flagged candidates it left
-// untraced once more, alone. The result equals one BoundaryRefinement that saw every view (bit
-// for bit: the counts are exact in both, and each candidate's minima come from a refinement that
-// traced all its overflowing views). `for_each_view(add)` calls add(camera, mask) once per view,
+// untraced once more, alone, their minima bounded by the first pass's (bound_minimum). The
+// result equals one BoundaryRefinement that saw every view (bit for bit: the counts are exact in
+// both, and each candidate's minima come from a refinement that traced all its overflowing
+// views, or from the first pass's traced views). `for_each_view(add)` calls add(camera, mask) once per view,
 // `views` of them, in the same order each time; it is called once, or twice when some flagged
 // candidate was left untraced.
 template <class ForEachView>
@@ -700,6 +716,8 @@ AbrResult refine_deferred(const GaussianScene& scene, const std::vector<Index>& 
   for (std::size_t i = 0; i < again.size(); ++i) sub[i] = candidates[again[i]];
   BoundaryRefinement exact(scene, std::move(sub), params);
   exact.expect_views(views);
+  for (std::size_t i = 0; i < again.size(); ++i)  // the first pass's minima bound the exact ones
+    exact.bound_minimum(i, {abr.min_factor(again[i], 0), abr.min_factor(again[i], 1), abr.min_factor(again[i], 2)});
   for_each_view([&](const Camera& cam, const Mask& mask) { exact.add_view(cam, mask); });
   const AbrResult b = exact.finish();
   for (std::size_t i = 0; i < again.size(); ++i) {
