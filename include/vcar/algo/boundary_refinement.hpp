@@ -699,9 +699,9 @@ class BoundaryRefinement {
 // untraced once more, alone, their minima bounded by the first pass's (bound_minimum). The
 // result equals one BoundaryRefinement that saw every view (bit for bit: the counts are exact in
 // both, and each candidate's minima come from a refinement that traced all its overflowing
-// views, or from the first pass's traced views). `for_each_view(add)` calls add(camera, mask) once per view,
-// `views` of them, in the same order each time; it is called once, or twice when some flagged
-// candidate was left untraced.
+// views, or from the first pass's traced views). `for_each_view(add)` calls add(camera, mask)
+// once per view, `views` of them, in the same order each time; it is called once, or twice when
+// some flagged candidate was left untraced.
 template <class ForEachView>
 AbrResult refine_deferred(const GaussianScene& scene, const std::vector<Index>& candidates, const AbrParams& params,
                           std::size_t views, ForEachView&& for_each_view) {
