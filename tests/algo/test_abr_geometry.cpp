@@ -150,3 +150,42 @@ TEST_CASE("abr_geometry: a lane's bits do not depend on the other lanes") {
   }
   CHECK(differing == 0);
 }
+
+TEST_CASE("lambda1_bound: bounds Eq. 10's lambda_1 over a rectangle of centres, and is exact at the principal point") {
+  const auto gs = random_gaussians(2000, 11);
+  const vcar::Intrinsics k{320, 240, 260.f, 250.f, 161.3f, 118.7f};
+  const vcar::Camera cam = vcar::Camera::look_at({0.4f, 0.3f, -0.8f}, {0, 0, 0}, {0, 1, 0}, k, "v");
+  const vcar::ProjectionParams pp;
+  const vcar::AbrCamera C = vcar::AbrCamera::from(cam, pp);
+  int tested = 0, beside = 0;
+  double tightest = 0;  // largest lambda_1 / bound seen
+  for (std::size_t i = 0; i < gs.size(); i += vcar::simd::width) {
+    const Columns cols(gs, i);
+    vcar::AbrBatch b;
+    cols.geometry(C, b);
+    for (std::size_t l = 0; l < vcar::simd::width && i + l < gs.size(); ++l) {
+      if (!(b.front[l] > 0.f)) continue;
+      const RandomGaussian& x = gs[i + l];
+      const Eigen::Vector3f t = cam.R_w * x.mu + cam.t_w;
+      const float s2 = x.s.cwiseAbs2().maxCoeff();
+      // The Gaussian's own centre as the rectangle, and a wider rectangle around it.
+      const float bound = vcar::lambda1_bound(C, b.mx[l], b.my[l], b.mx[l], b.my[l], t.z(), s2);
+      const float wider = vcar::lambda1_bound(C, b.mx[l] - 40.f, b.my[l] - 3.f, b.mx[l] + 5.f, b.my[l] + 30.f, 0.9f * t.z(), s2);
+      CHECK(b.lambda1[l] <= bound * (1.f + 1e-5f));
+      CHECK(bound <= wider);
+      tightest = std::max(tightest, static_cast<double>(b.lambda1[l]) / bound);
+      beside += b.mx[l] < 0.f || b.mx[l] > 320.f || b.my[l] < 0.f || b.my[l] > 240.f;  // clamped Jacobian
+      ++tested;
+    }
+  }
+  CHECK(tested > 500);
+  CHECK(beside > 20);
+  CHECK(tightest > 0.9);  // not a loose bound: some Gaussians come close to it
+  // At the principal point (a = b = 0) with fx = fy and an isotropic Gaussian, J J^T = (f/z)^2 I:
+  // lambda_1 = (f/z)^2 s^2 + eps2d, the bound exactly. By hand: f = 250, z = 2, s = 0.1.
+  const vcar::Intrinsics k2{320, 240, 250.f, 250.f, 160.f, 120.f};
+  const vcar::AbrCamera C2 = vcar::AbrCamera::from(vcar::Camera::look_at({0, 0, -2}, {0, 0, 0}, {0, 1, 0}, k2, "c"), pp);
+  CHECK(vcar::lambda1_bound(C2, 160.f, 120.f, 160.f, 120.f, 2.f, 0.01f) == Approx(125.f * 125.f * 0.01f + 0.3f));
+  // Off axis, by hand: u = 160 + 125 (a = 0.5), v = 120 (b = 0): (f/z)^2 (1 + 0.25) s^2 + eps2d.
+  CHECK(vcar::lambda1_bound(C2, 285.f, 120.f, 285.f, 120.f, 2.f, 0.01f) == Approx(156.25f * 1.25f + 0.3f));
+}

@@ -540,6 +540,32 @@ TEST_CASE("expect_views skips candidates whose gate cannot open, with the same r
   CHECK_THROWS_AS(next.carry(more), vcar::Error);  // partial state cannot be carried
 }
 
+TEST_CASE("expect_views' gate table: least_opening_overflow is the least count that passes gate_can_open") {
+  using BR = vcar::BoundaryRefinement;
+  // By hand: rho 0.5, 4 views to come, 6 seen: (o + 4) / 10 >= 0.5 - 1e-6 first at o = 1.
+  CHECK(BR::least_opening_overflow(6, 4, 0.5f) == 1);
+  CHECK(BR::least_opening_overflow(2, 4, 0.5f) == 0);    // (0 + 4) / 6 passes already
+  CHECK(BR::least_opening_overflow(10, 0, 0.3f) == 3);   // 3 / 10 >= 0.3 - 1e-6 (finish() then needs 4)
+  CHECK(BR::least_opening_overflow(100, 1, 0.99f) == 99);
+  // Brute force over counts, views to come and thresholds, exact multiples of rho included.
+  std::size_t checked = 0;
+  for (float rho : {0.f, 0.1f, 0.25f, 0.3f, 0.5f, 1.f / 3.f, 0.7f, 0.9f, 0.999f})
+    for (std::size_t remaining : {0, 1, 2, 3, 7, 50, 1000})
+      for (std::size_t v = 0; v <= 300; ++v) {
+        const std::size_t least = BR::least_opening_overflow(v, remaining, rho);
+        REQUIRE(least <= v);
+        for (std::size_t o = 0; o <= v; ++o) {
+          if (BR::gate_can_open(o, v, remaining, rho) != (o >= least)) {
+            FAIL_CHECK("rho " << rho << " remaining " << remaining << " n_vis " << v << " n_ovf " << o);
+          }
+          ++checked;
+        }
+      }
+  CHECK(checked > 1000000);
+  CHECK(BR::least_opening_overflow(65535, 65535, 0.5f) == 0);  // large counts: no overflow of the guess
+  CHECK(BR::least_opening_overflow(65535, 0, 0.5f) == 32768);  // 32768 / 65535 >= 0.5 - 1e-6; 32767 is not
+}
+
 TEST_CASE("defer_tracing and refine_deferred: the flagged candidates left untraced, refined alone, complete a full refinement") {
   const RingFixture f = ring_fixture();
   std::vector<vcar::Index> cand(f.scene.size());

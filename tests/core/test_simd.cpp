@@ -113,6 +113,17 @@ TEST_CASE("simd: to_int truncates, reduce_add sums, gather reads words[idx], int
     const std::int32_t q = idx[l] * 7;
     CHECK(got[l] == ((words[static_cast<std::size_t>(q >> 5)] >> (q & 31)) & 1));
   }
+  // shift_right (AVX-512's own variable shift; xsimd 8.1 has none there): arithmetic, every count
+  // 0..31, negative words included.
+  for (int base = 0; base < 32; base += static_cast<int>(L)) {
+    alignas(64) std::int32_t w[L], s[L];
+    for (std::size_t l = 0; l < L; ++l) {
+      s[l] = (base + static_cast<int>(l)) % 32;
+      w[l] = (l % 2 ? -1 : 1) * static_cast<std::int32_t>(0x12345678u >> (l % 5));
+    }
+    simd::shift_right(BI::load_aligned(w), BI::load_aligned(s)).store_aligned(got);
+    for (std::size_t l = 0; l < L; ++l) CHECK(got[l] == (w[l] >> s[l]));
+  }
 }
 
 TEST_CASE("simd: nonzero_bytes_64 and nonzero_bytes_8 set bit j iff byte j is nonzero", "[simd]") {

@@ -103,6 +103,20 @@ struct AbrBatch {
   Eigen::Vector2f q(int d, std::size_t l) const { return {qx[d][l], qy[d][l]}; }
 };
 
+// Beyond the paper (a bound for skipping work; no result depends on it): an upper bound on
+// Eq. 10's lambda_1 (largest eigenvalue of Sigma2D) for every Gaussian whose max_d s_d^2 is at
+// most s2 and whose mean lies at camera depth z >= zmin > 0 and projects to u in [u0, u1], v in
+// [v0, v1] (pixels). Sigma2D = J W Sigma W^T J^T + eps2d I with ||W Sigma W^T|| = max_d s_d^2,
+// and J = diag(fx, fy) [[1, 0, -a], [0, 1, -b]] / z, a = tx/z, b = ty/z clamped (B.7), whose
+// spectral norm is ||J||^2 <= (max(fx, fy) / z)^2 (1 + a^2 + b^2); |a| <= max |u - cx| / fx over
+// the rectangle (clamping only shrinks it) and <= the clamp's own limit, b alike.
+inline float lambda1_bound(const AbrCamera& C, float u0, float v0, float u1, float v1, float zmin, float s2) {
+  const float a = std::min(std::max(std::abs(u0 - C.cx), std::abs(u1 - C.cx)) / C.fx, std::max(C.lim.x_pos, C.lim.x_neg));
+  const float b = std::min(std::max(std::abs(v0 - C.cy), std::abs(v1 - C.cy)) / C.fy, std::max(C.lim.y_pos, C.lim.y_neg));
+  const float f = std::max(C.fx, C.fy) / zmin;
+  return f * f * (1.f + a * a + b * b) * s2 + C.eps2d;
+}
+
 // Eq. 9-10 and B.7 for simd::width Gaussians: means x, y, z, rotations rot[e] (R(e % 3, e / 3),
 // column-major) and scales s[d], each a pointer to simd::width consecutive values; endpoints at
 // sigma_c standard deviations. The perspective Jacobian is perspective_jacobian's (tx/z, ty/z

@@ -269,7 +269,8 @@ class BoundaryRefinement {
     // With expect_views: this view and those after it; a candidate whose gate cannot open even
     // if it overflows in all of them is not observed any more.
     const std::size_t remaining = expected_ ? expected_ - views_ + 1 : 0;
-    auto want = [&](std::size_t k) { return !expected_ || gate_can_open(k, remaining); };
+    if (expected_) fill_gate_table(remaining);
+    auto want = [&](std::size_t k) { return !expected_ || n_ovf_[k] >= gate_min_ovf_[n_vis_[k]]; };
     if (!defer_) {
       observe_view(cam, mask, tiles, want, [&](std::size_t k, const AbrObservation& obs) { add(k, obs, view); });
       return;
@@ -459,6 +460,26 @@ class BoundaryRefinement {
     return r;
   }
 
+  // Whether a slot with counts (n_ovf, n_vis) can still end with gamma > rho (B.3) when
+  // `remaining` views are to come (this one included): (n_ovf + R) / (n_vis + R) against rho,
+  // with a margin so that the float gate of finish() never decides otherwise.
+  static bool gate_can_open(std::size_t n_ovf, std::size_t n_vis, std::size_t remaining, float rho) {
+    const double o = static_cast<double>(n_ovf) + static_cast<double>(remaining);
+    const double v = static_cast<double>(n_vis) + static_cast<double>(remaining);
+    return o >= (static_cast<double>(rho) - 1e-6) * v;  // o / v >= rho - 1e-6, or v = 0 (then o = 0)
+  }
+  // The least n_ovf with which a slot of n_vis = v passes gate_can_open (the test grows with
+  // n_ovf, and passes at n_ovf = v since rho < 1).
+  static std::size_t least_opening_overflow(std::size_t v, std::size_t remaining, float rho) {
+    // Start near the solution of o + R = (rho - 1e-6)(v + R), then step to the least passing count.
+    const double guess = std::ceil((static_cast<double>(rho) - 1e-6) * static_cast<double>(v + remaining)) -
+                         static_cast<double>(remaining);
+    std::size_t o = guess <= 0.0 ? 0 : std::min(v, static_cast<std::size_t>(guess));
+    while (o > 0 && gate_can_open(o - 1, v, remaining, rho)) --o;
+    while (o < v && !gate_can_open(o, v, remaining, rho)) ++o;
+    return o;
+  }
+
   std::size_t size() const noexcept { return candidates_.size(); }
   const std::vector<Index>& candidates() const noexcept { return candidates_; }
   const AbrParams& params() const noexcept { return params_; }
@@ -503,13 +524,13 @@ class BoundaryRefinement {
     ++views_;
   }
 
-  // Whether slot k can still end with gamma > rho (B.3) when `remaining` views are to come
-  // (this one included): (n_ovf + R) / (n_vis + R) against rho, with a margin so that the
-  // float gate of finish() never decides otherwise.
-  bool gate_can_open(std::size_t k, std::size_t remaining) const {
-    const double o = static_cast<double>(n_ovf_[k]) + static_cast<double>(remaining);
-    const double v = static_cast<double>(n_vis_[k]) + static_cast<double>(remaining);
-    return o >= (static_cast<double>(params_.rho) - 1e-6) * v;  // o / v >= rho - 1e-6, or v = 0 (then o = 0)
+  // gate_can_open as a table for this view (expect_views): gate_min_ovf_[v] is
+  // least_opening_overflow(v), so that the per-slot test is one integer comparison. n_vis <
+  // views_ here.
+  void fill_gate_table(std::size_t remaining) {
+    gate_min_ovf_.resize(views_ + 1);
+    for (std::size_t v = 0; v <= views_; ++v)
+      gate_min_ovf_[v] = static_cast<std::uint32_t>(least_opening_overflow(v, remaining, params_.rho));
   }
 
   // Slot k's observation in view `view` enters its counts and minima (B.3).
@@ -558,7 +579,7 @@ class BoundaryRefinement {
         bool any = false;
         for (std::size_t k = j0; k < j1 && !any; ++k) any = want(k);
         if (!any) continue;
-        switch (tiles ? chunk_content(P, cam, box_[c], p) : MaskTiles::mixed) {
+        switch (tiles ? chunk_content(P, C, cam, box_[c], p) : MaskTiles::mixed) {
           case MaskTiles::background: continue;  // no centre on foreground: none eligible (B.1)
           case MaskTiles::foreground:            // every centre and endpoint on foreground
             for (std::size_t k = j0; k < j1; ++k)
@@ -645,8 +666,8 @@ class BoundaryRefinement {
   // every 3-sigma endpoint lands on foreground inside the image (all eligible, none overflows:
   // Eq. 9's endpoints lie within sigma_c sqrt(lambda_1) of the centre, and by Eq. 10 lambda_1 <=
   // ||J||^2 max_d s_d^2 + eps2d); mixed otherwise (observed Gaussian by Gaussian).
-  MaskTiles::Content chunk_content(const detail::MeanProjection& P, const Camera& cam, const std::array<float, 7>& b,
-                                   const AbrParams& p) const {
+  MaskTiles::Content chunk_content(const detail::MeanProjection& P, const AbrCamera& C, const Camera& cam,
+                                   const std::array<float, 7>& b, const AbrParams& p) const {
     const detail::BoxView v = detail::project_box(P, b.data(), b.data() + 3);
     if (v.visibility == detail::BoxView::none_visible) return MaskTiles::background;
     const MaskTiles::Content centres = tiles_.classify(v.x0, v.y0, v.x1, v.y1);
@@ -655,12 +676,9 @@ class BoundaryRefinement {
     // Nearest camera depth over the box (affine in the point: at a corner), with margin.
     const float zmin = v.zmin * 0.999f;
     if (!(zmin >= p.projection.near_plane * 1.001f) || !(zmin < p.projection.far_plane * 0.999f)) return MaskTiles::mixed;
-    // ||J||^2 <= ||J||_F^2 <= (f / z)^2 (2 + (tx/z)^2 + (ty/z)^2), |tx/z|, |ty/z| clamped to the frustum limits.
-    const JacobianLimits lim = JacobianLimits::of(cam, p.projection.frustum_margin);
-    const float lx = std::max(lim.x_pos, lim.x_neg), ly = std::max(lim.y_pos, lim.y_neg);
-    const float tmax = 2.f + lx * lx + ly * ly;
-    const float f = std::max(cam.fx, cam.fy) / zmin;
-    const float lambda1 = f * f * tmax * b[6] + p.projection.eps2d;
+    // lambda_1 over the chunk (Eq. 10), from the rectangle of its centres (one pixel wider).
+    const float lambda1 = lambda1_bound(C, static_cast<float>(v.x0), static_cast<float>(v.y0), static_cast<float>(v.x1 + 1),
+                                        static_cast<float>(v.y1 + 1), zmin, b[6]) * 1.001f;
     const float reach = p.sigma_c * std::sqrt(lambda1) * 1.001f + 1.f;  // px, with margin
     if (!(reach < 1e6f)) return MaskTiles::mixed;
     const int r = static_cast<int>(std::ceil(reach));
@@ -690,6 +708,7 @@ class BoundaryRefinement {
   std::vector<std::uint32_t> wanted_boxes_;  // chunk boxes with fresh or stale slots (completion)
   std::size_t views_ = 0;
   std::size_t expected_ = 0;                 // expect_views (0: every candidate observed in every view)
+  std::vector<std::uint32_t> gate_min_ovf_;  // expect_views: least n_ovf that can open the gate, by n_vis
   bool defer_ = false;                       // defer_tracing
   std::vector<std::uint8_t> untraced_;       // defer_tracing: an overflowing view was not traced
 };

@@ -92,6 +92,18 @@ struct ChunkedMeans {
   std::size_t chunks() const { return box.size(); }
 };
 
+// out[j] += a[j] + c for j < count, wrapping as the uint16 counters do. Separate restrict
+// pointers and, for a whole chunk, a constant trip count let the compiler vectorise it.
+inline void fold_counts(std::uint16_t* __restrict out, const std::int32_t* __restrict a, std::int32_t c,
+                        std::size_t count) {
+  constexpr std::size_t C = ChunkedMeans::chunk_size;
+  if (count == C) {
+    for (std::size_t j = 0; j < C; ++j) out[j] = static_cast<std::uint16_t>(out[j] + a[j] + c);
+    return;
+  }
+  for (std::size_t j = 0; j < count; ++j) out[j] = static_cast<std::uint16_t>(out[j] + a[j] + c);
+}
+
 // Votes chunks [c0, c1) in every queued view. Counters are by sorted position; fg has
 // n_objects rows of stride `n`. Per chunk, counts over the queued views are summed in 32-bit
 // arrays (SIMD adds, in L1) plus per-chunk constants, and added to the uint16 counters once.
@@ -158,12 +170,9 @@ inline void vote_chunks(const ChunkedMeans& cm, std::size_t c0, std::size_t c1, 
           }
         }
       }
-      const std::size_t j1 = std::min(n, j0 + C);
-      for (std::size_t j = j0; j < j1; ++j) {
-        if (o0 == 0) visible[j] = static_cast<std::uint16_t>(visible[j] + acc[j - j0] + add[0]);
-        for (std::size_t k = o0; k < k1; ++k)
-          fg[k * n + j] = static_cast<std::uint16_t>(fg[k * n + j] + acc[(1 + k - o0) * C + j - j0] + add[1 + k]);
-      }
+      const std::size_t count = std::min(n, j0 + C) - j0;
+      if (o0 == 0) fold_counts(visible + j0, acc, add[0], count);
+      for (std::size_t k = o0; k < k1; ++k) fold_counts(fg + k * n + j0, acc + (1 + k - o0) * C, add[1 + k], count);
     }
   }
 }

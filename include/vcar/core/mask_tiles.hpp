@@ -79,7 +79,7 @@ public:
     using BI = simd::batch<std::int32_t>;
     const BI word_index = ((((iv >> 3) * BI(tw_)) + (iu >> 3)) << 1) + ((iv >> 2) & BI(1));
     const BI shift = ((iv & BI(3)) << 3) + (iu & BI(7));
-    return (simd::gather(reinterpret_cast<const std::int32_t*>(words_.data()), word_index) >> shift) & BI(1);
+    return simd::shift_right(simd::gather(reinterpret_cast<const std::int32_t*>(words_.data()), word_index), shift) & BI(1);
   }
   // The tile words (see the top of the file), tiles_x() x ceil(height / 8).
   const std::uint64_t* words() const noexcept { return words_.data(); }

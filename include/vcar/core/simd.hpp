@@ -99,6 +99,16 @@ inline batch<std::int32_t> gather(const std::int32_t* words, const batch<std::in
 #endif
 }
 
+// a >> s per lane (arithmetic). xsimd 8.1 has AVX2's variable shift but none for AVX-512, where
+// its operator>> falls back to one scalar shift per lane.
+inline batch<std::int32_t> shift_right(const batch<std::int32_t>& a, const batch<std::int32_t>& s) {
+#if defined(__AVX512F__)
+  return batch<std::int32_t>(_mm512_srav_epi32(a, s));
+#else
+  return a >> s;
+#endif
+}
+
 #if defined(VCAR_SIMD_POP_DIAGNOSTICS)
 #pragma GCC diagnostic pop
 #undef VCAR_SIMD_POP_DIAGNOSTICS
@@ -229,6 +239,7 @@ inline batch<std::int32_t> gather(const std::int32_t* words, const batch<std::in
   for (std::size_t l = 0; l < scalar_width; ++l) r.v[l] = words[idx.v[l]];
   return r;
 }
+inline batch<std::int32_t> shift_right(const batch<std::int32_t>& a, const batch<std::int32_t>& s) { return a >> s; }
 
 #endif
 
