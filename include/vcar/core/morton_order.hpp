@@ -11,6 +11,7 @@
 
 #include "vcar/core/parallel.hpp"
 #include "vcar/core/radix_sort.hpp"
+#include "vcar/core/simd.hpp"
 
 namespace vcar {
 
@@ -45,18 +46,38 @@ inline std::vector<std::uint32_t> morton_order(const float* x, const float* y, c
     hi[d] = -lo[d];
     for (const auto& bb : bounds) lo[d] = std::min(lo[d], bb[d]), hi[d] = std::max(hi[d], bb[3 + d]);
   }
-  auto spread = [](std::uint32_t v) {  // 10 bits -> every third bit
-    v = (v | (v << 16)) & 0x030000FFu;
-    v = (v | (v << 8)) & 0x0300F00Fu;
-    v = (v | (v << 4)) & 0x030C30C3u;
-    v = (v | (v << 2)) & 0x09249249u;
+  auto spread = [](auto v) {  // 10 bits -> every third bit (uint32_t, or int32 SIMD lanes)
+    using V = decltype(v);
+    v = (v | (v << 16)) & V(0x030000FF);
+    v = (v | (v << 8)) & V(0x0300F00F);
+    v = (v | (v << 4)) & V(0x030C30C3);
+    v = (v | (v << 2)) & V(0x09249249);
     return v;
   };
   // Keys (code << 32 | position): sorting them by their upper 30 bits keeps ties in position order.
   std::vector<std::uint64_t> key(n), tmp;
   parallel_for(blocks, [&](std::int64_t b) {
     const auto [k0, k1] = range(b);
-    for (std::size_t k = k0; k < k1; ++k) {
+    std::size_t k = k0;
+    // simd::width points at a time, each lane with the scalar tail's arithmetic (a correctly
+    // rounded division, the same clamp and truncation): the same codes.
+    using BF = simd::batch<float>;
+    using BI = simd::batch<std::int32_t>;
+    constexpr std::size_t L = simd::width;
+    alignas(64) std::int32_t codes[L];
+    for (; k + L <= k1; k += L) {
+      BI m(0);
+      for (int d = 0; d < 3; ++d) {
+        const float ext = hi[d] - lo[d];
+        const BF t = ext > 0.f ? (BF::load_unaligned(c[d] + k) - BF(lo[d])) / BF(ext) * BF(1024.f) : BF(0.f);
+        const BF q = simd::select(t >= BF(0.f), simd::min(BF(1023.f), t), BF(0.f));  // NaN -> 0
+        m = m | (spread(simd::to_int(q)) << d);
+      }
+      m.store_aligned(codes);
+      for (std::size_t l = 0; l < L; ++l)
+        key[k + l] = (static_cast<std::uint64_t>(static_cast<std::uint32_t>(codes[l])) << 32) | (k + l);
+    }
+    for (; k < k1; ++k) {
       std::uint32_t m = 0;
       for (int d = 0; d < 3; ++d) {
         const float ext = hi[d] - lo[d];

@@ -186,6 +186,7 @@ struct batch {
   friend batch operator/(const batch& a, const batch& b) { return zip(a, b, [](T x, T y) { return T(x / y); }); }
   friend batch operator-(const batch& a) { return map(a, [](T x) { return T(-x); }); }
   friend batch operator&(const batch& a, const batch& b) { return zip(a, b, [](T x, T y) { return T(x & y); }); }
+  friend batch operator|(const batch& a, const batch& b) { return zip(a, b, [](T x, T y) { return T(x | y); }); }
   friend batch operator>>(const batch& a, const batch& b) { return zip(a, b, [](T x, T y) { return T(x >> y); }); }
   friend batch operator>>(const batch& a, int s) { return map(a, [s](T x) { return T(x >> s); }); }
   friend batch operator<<(const batch& a, int s) { return map(a, [s](T x) { return T(x << s); }); }
