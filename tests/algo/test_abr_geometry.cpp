@@ -54,6 +54,24 @@ struct Columns {
   }
 };
 
+// A 320 x 240 view with fx != fy and an off-centre principal point, looking at the cube of
+// random_gaussians from inside it (some Gaussians behind it, many beside the image).
+vcar::Camera oblique_camera() {
+  const vcar::Intrinsics k{320, 240, 260.f, 250.f, 161.3f, 118.7f};
+  return vcar::Camera::look_at({0.4f, 0.3f, -0.8f}, {0, 0, 0}, {0, 1, 0}, k, "v");
+}
+
+// f(b, l, g) for every Gaussian g of gs: lane l of the batch b that abr_geometry computed for it.
+template <class F>
+void for_each_lane(const std::vector<RandomGaussian>& gs, const vcar::AbrCamera& C, F&& f) {
+  for (std::size_t i = 0; i < gs.size(); i += vcar::simd::width) {
+    const Columns cols(gs, i);
+    vcar::AbrBatch b;
+    cols.geometry(C, b);
+    for (std::size_t l = 0; l < vcar::simd::width && i + l < gs.size(); ++l) f(b, l, gs[i + l]);
+  }
+}
+
 }  // namespace
 
 TEST_CASE("symmetric_eigen2 matches a brute-force eigen solver") {
@@ -80,47 +98,40 @@ TEST_CASE("symmetric_eigen2 matches a brute-force eigen solver") {
 
 TEST_CASE("abr_geometry: every lane as project_gaussian computes it (Eq. 10, B.7), Eq. 9's eigenpairs and endpoints") {
   const auto gs = random_gaussians(800, 7);
-  const vcar::Intrinsics k{320, 240, 260.f, 250.f, 161.3f, 118.7f};
-  const vcar::Camera cam = vcar::Camera::look_at({0.4f, 0.3f, -0.8f}, {0, 0, 0}, {0, 1, 0}, k, "v");
+  const vcar::Camera cam = oblique_camera();
   const vcar::ProjectionParams pp;
   const vcar::AbrCamera C = vcar::AbrCamera::from(cam, pp);
   int front = 0, behind = 0;
-  for (std::size_t i = 0; i < gs.size(); i += vcar::simd::width) {
-    const Columns cols(gs, i);
-    vcar::AbrBatch b;
-    cols.geometry(C, b);
-    for (std::size_t l = 0; l < vcar::simd::width && i + l < gs.size(); ++l) {
-      const RandomGaussian& x = gs[i + l];
-      const vcar::ProjectedGaussian g = vcar::project_gaussian(cam, x.mu, x.R, x.s, 1.f, pp);
-      const bool in_front = g.depth >= pp.near_plane && g.depth <= pp.far_plane;
-      CHECK((b.front[l] > 0.f) == in_front);  // rule (e)
-      if (!in_front) { ++behind; continue; }
-      ++front;
-      CHECK(b.mx[l] == Approx(g.mean.x()).epsilon(1e-5).margin(1e-3));
-      CHECK(b.my[l] == Approx(g.mean.y()).epsilon(1e-5).margin(1e-3));
-      const Eigen::Matrix2d S = g.Sigma2D.cast<double>();
-      const double scale = S.norm();
-      for (int d = 0; d < 3; ++d) {
-        CHECK((b.q(d, l) - g.q[d]).norm() <= 1e-4 * (1.0 + g.q[d].norm()));
-      }
-      CHECK(b.det[l] == Approx(S.determinant()).margin(1e-4 * scale * scale));
-      CHECK(b.lambda1[l] + b.lambda2[l] == Approx(S.trace()).margin(1e-5 * scale));
-      const Eigen::Vector2d e1(b.e1x[l], b.e1y[l]);
-      CHECK(e1.norm() == Approx(1).epsilon(1e-5));
-      CHECK((S * e1 - b.lambda1[l] * e1).norm() <= 1e-4 * scale);  // Eq. 9: e1 is the major axis
-      // Eq. 9's endpoints: m + a e1, m - a e1, m + b e2, m - b e2 with a = 3 sqrt(lambda1),
-      // b = 3 sqrt(lambda2), e2 = (-e1.y, e1.x) (up to the rounding of m + len u in float).
-      const Eigen::Vector2d e2(-e1.y(), e1.x());
-      const double tol = 1e-3 + 1e-6 * (std::abs(b.mx[l]) + std::abs(b.my[l]));
-      for (int k = 0; k < 4; ++k) {
-        const double len = 3.0 * std::sqrt(std::max(0.0, static_cast<double>(k < 2 ? b.lambda1[l] : b.lambda2[l])));
-        CHECK(b.axis[k / 2][l] == Approx(len).epsilon(1e-5));
-        const Eigen::Vector2d expect = (k % 2 ? -len : len) * (k < 2 ? e1 : e2);
-        const Eigen::Vector2d d(b.ex[k][l] - static_cast<double>(b.mx[l]), b.ey[k][l] - static_cast<double>(b.my[l]));
-        CHECK((d - expect).norm() <= tol * (1.0 + len));
-      }
+  for_each_lane(gs, C, [&](const vcar::AbrBatch& b, std::size_t l, const RandomGaussian& x) {
+    const vcar::ProjectedGaussian g = vcar::project_gaussian(cam, x.mu, x.R, x.s, 1.f, pp);
+    const bool in_front = g.depth >= pp.near_plane && g.depth <= pp.far_plane;
+    CHECK((b.front[l] > 0.f) == in_front);  // rule (e)
+    if (!in_front) { ++behind; return; }
+    ++front;
+    CHECK(b.mx[l] == Approx(g.mean.x()).epsilon(1e-5).margin(1e-3));
+    CHECK(b.my[l] == Approx(g.mean.y()).epsilon(1e-5).margin(1e-3));
+    const Eigen::Matrix2d S = g.Sigma2D.cast<double>();
+    const double scale = S.norm();
+    for (int d = 0; d < 3; ++d) {
+      CHECK((b.q(d, l) - g.q[d]).norm() <= 1e-4 * (1.0 + g.q[d].norm()));
     }
-  }
+    CHECK(b.det[l] == Approx(S.determinant()).margin(1e-4 * scale * scale));
+    CHECK(b.lambda1[l] + b.lambda2[l] == Approx(S.trace()).margin(1e-5 * scale));
+    const Eigen::Vector2d e1(b.e1x[l], b.e1y[l]);
+    CHECK(e1.norm() == Approx(1).epsilon(1e-5));
+    CHECK((S * e1 - b.lambda1[l] * e1).norm() <= 1e-4 * scale);  // Eq. 9: e1 is the major axis
+    // Eq. 9's endpoints: m + a e1, m - a e1, m + b e2, m - b e2 with a = 3 sqrt(lambda1),
+    // b = 3 sqrt(lambda2), e2 = (-e1.y, e1.x) (up to the rounding of m + len u in float).
+    const Eigen::Vector2d e2(-e1.y(), e1.x());
+    const double tol = 1e-3 + 1e-6 * (std::abs(b.mx[l]) + std::abs(b.my[l]));
+    for (int k = 0; k < 4; ++k) {
+      const double len = 3.0 * std::sqrt(std::max(0.0, static_cast<double>(k < 2 ? b.lambda1[l] : b.lambda2[l])));
+      CHECK(b.axis[k / 2][l] == Approx(len).epsilon(1e-5));
+      const Eigen::Vector2d expect = (k % 2 ? -len : len) * (k < 2 ? e1 : e2);
+      const Eigen::Vector2d d(b.ex[k][l] - static_cast<double>(b.mx[l]), b.ey[k][l] - static_cast<double>(b.my[l]));
+      CHECK((d - expect).norm() <= tol * (1.0 + len));
+    }
+  });
   CHECK(front > 300);  // both outcomes are exercised
   CHECK(behind > 100);
 }
@@ -153,31 +164,24 @@ TEST_CASE("abr_geometry: a lane's bits do not depend on the other lanes") {
 
 TEST_CASE("lambda1_bound: bounds Eq. 10's lambda_1 over a rectangle of centres, and is exact at the principal point") {
   const auto gs = random_gaussians(2000, 11);
-  const vcar::Intrinsics k{320, 240, 260.f, 250.f, 161.3f, 118.7f};
-  const vcar::Camera cam = vcar::Camera::look_at({0.4f, 0.3f, -0.8f}, {0, 0, 0}, {0, 1, 0}, k, "v");
+  const vcar::Camera cam = oblique_camera();
   const vcar::ProjectionParams pp;
   const vcar::AbrCamera C = vcar::AbrCamera::from(cam, pp);
   int tested = 0, beside = 0;
   double tightest = 0;  // largest lambda_1 / bound seen
-  for (std::size_t i = 0; i < gs.size(); i += vcar::simd::width) {
-    const Columns cols(gs, i);
-    vcar::AbrBatch b;
-    cols.geometry(C, b);
-    for (std::size_t l = 0; l < vcar::simd::width && i + l < gs.size(); ++l) {
-      if (!(b.front[l] > 0.f)) continue;
-      const RandomGaussian& x = gs[i + l];
-      const Eigen::Vector3f t = cam.R_w * x.mu + cam.t_w;
-      const float s2 = x.s.cwiseAbs2().maxCoeff();
-      // The Gaussian's own centre as the rectangle, and a wider rectangle around it.
-      const float bound = vcar::lambda1_bound(C, b.mx[l], b.my[l], b.mx[l], b.my[l], t.z(), s2);
-      const float wider = vcar::lambda1_bound(C, b.mx[l] - 40.f, b.my[l] - 3.f, b.mx[l] + 5.f, b.my[l] + 30.f, 0.9f * t.z(), s2);
-      CHECK(b.lambda1[l] <= bound * (1.f + 1e-5f));
-      CHECK(bound <= wider);
-      tightest = std::max(tightest, static_cast<double>(b.lambda1[l]) / bound);
-      beside += b.mx[l] < 0.f || b.mx[l] > 320.f || b.my[l] < 0.f || b.my[l] > 240.f;  // clamped Jacobian
-      ++tested;
-    }
-  }
+  for_each_lane(gs, C, [&](const vcar::AbrBatch& b, std::size_t l, const RandomGaussian& x) {
+    if (!(b.front[l] > 0.f)) return;
+    const Eigen::Vector3f t = cam.R_w * x.mu + cam.t_w;
+    const float s2 = x.s.cwiseAbs2().maxCoeff();
+    // The Gaussian's own centre as the rectangle, and a wider rectangle around it.
+    const float bound = vcar::lambda1_bound(C, b.mx[l], b.my[l], b.mx[l], b.my[l], t.z(), s2);
+    const float wider = vcar::lambda1_bound(C, b.mx[l] - 40.f, b.my[l] - 3.f, b.mx[l] + 5.f, b.my[l] + 30.f, 0.9f * t.z(), s2);
+    CHECK(b.lambda1[l] <= bound * (1.f + 1e-5f));
+    CHECK(bound <= wider);
+    tightest = std::max(tightest, static_cast<double>(b.lambda1[l]) / bound);
+    beside += b.mx[l] < 0.f || b.mx[l] > 320.f || b.my[l] < 0.f || b.my[l] > 240.f;  // clamped Jacobian
+    ++tested;
+  });
   CHECK(tested > 500);
   CHECK(beside > 20);
   CHECK(tightest > 0.9);  // not a loose bound: some Gaussians come close to it
