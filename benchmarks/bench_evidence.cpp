@@ -145,7 +145,8 @@ const std::vector<std::string> kVariants = {"coarse", "sss", "abr", "full", "occ
 const std::vector<std::string> kRobustAblation = {"robust-band", "robust-noocc", "robust-nokeep",
                                                   "robust-nolowpass", "robust-tau08", "robust-nofs",
                                                   "robust-noundershoot", "robust-nostrict", "robust-noabru",
-                                                  "robust-nocoarse2", "robust-nocoplanar", "robust-nogate"};
+                                                  "robust-nocoarse2", "robust-nocoplanar", "robust-nogate",
+                                                  "robust-noovershoot"};
 
 std::vector<std::string> all_methods(bool variants = true) {
   std::vector<std::string> m = kPeers;
@@ -188,6 +189,7 @@ VcarParams vcar_params(const std::string& variant, const Experiment& e, const st
     else if (variant == "robust-nocoarse2") p.tau_coarse_split = 0.f;
     else if (variant == "robust-nocoplanar") p.coplanar_radius = 0.f;
     else if (variant == "robust-nogate") p.undershoot_gate = false;
+    else if (variant == "robust-noovershoot") p.overshoot_min = 0.f;
     else if (variant != "robust") throw Error("unknown variant '" + variant + "'", "--methods");
     if (e.failure == "tau") { p.tau_coarse = static_cast<float>(e.level); p.tau_fine = static_cast<float>(e.level); }
     for (const std::string& kv : set) io::set_parameter(p, kv);

@@ -477,6 +477,11 @@ std::string summary_text(const Diagnostics& d, const VcarParams& p, std::size_t 
     }
     s += "\n";
   }
+  if (d.overshoot_eroded > 0) {  // Eq. R11 ran
+    std::snprintf(buf, sizeof buf, "overshoot %zu masks eroded: their contours lay outside the render's edges (Eq. R11)\n",
+                  d.overshoot_eroded);
+    s += buf;
+  }
   if (p.coplanar_radius > 0.f && d.coplanar_dropped > 0) {  // Eq. R10 ran
     std::snprintf(buf, sizeof buf, "hidden    %zu Gaussians dropped: unseen, on a seen background plane (Eq. R10)\n",
                   d.coplanar_dropped);
@@ -555,6 +560,7 @@ nlohmann::json write_segmentation(const std::filesystem::path& out, const Gaussi
       {"sampled_positions", sampled},
       {"abr", {{"flagged", d.abr_flagged}, {"compressed", d.abr_compressed}, {"retraced", d.abr_retraced}, {"masks_widened", d.abr_masks_widened}}},
       {"coplanar_dropped", d.coplanar_dropped},
+      {"overshoot_eroded", d.overshoot_eroded},
       {"masks_missing", d.masks_missing},
       {"note", d.note},
       {"timings_s", timings},

@@ -172,6 +172,7 @@ MultiSegmentation segment_objects(const GaussianScene& scene, const std::vector<
     return img;
   };
   auto usable = [&](const Mask* m) { return vcar::detail::usable(m, params); };
+  Mask scratch;  // a mask eroded by Eq. R11
   ObjectMaskSink sink = [&](std::size_t k, std::size_t q, const Mask* m) {
     if (k >= frames.size() || q >= K)
       throw Error("segmenter answered frame " + std::to_string(k) + " object " + std::to_string(q), "coarse round");
@@ -190,7 +191,7 @@ MultiSegmentation segment_objects(const GaussianScene& scene, const std::vector<
       render = &last->second;
     }
     const auto tv = Clock::now();
-    vcar::detail::vote(*votes[q], cam, m, render, scene, nullptr, renderer, params);
+    m = vcar::detail::vote(*votes[q], cam, m, render, scene, nullptr, renderer, params, scratch);
     train_masks[q][order[k]] = m && params.enable_abr ? std::optional<RleMask>(RleMask::encode(*m)) : std::nullopt;
     t_vote += seconds_since(tv);
     if (q + 1 == K && progress && !progress({"coarse round (all objects)", k + 1, M, seconds_since(t_start)}))
@@ -215,6 +216,7 @@ MultiSegmentation segment_objects(const GaussianScene& scene, const std::vector<
   for (std::size_t o = 0; o < K; ++o) {
     detail_multi::OneObject one{&segmenter, ObjectRequest{o, objects[o].name, objects[o].prompt}};
     const auto to = Clock::now();
+    out.objects[o].diagnostics.overshoot_eroded = votes[o]->overshoot_eroded();
     // Stages 2 and 3 exactly as vcar::segment runs them after its coarse vote (Eq. R9 included).
     vcar::detail::refine_from_coarse(
         scene, train_cameras, objects[o].prompt, renderer, one, params, progress, t_start, train_masks[o],

@@ -333,6 +333,7 @@ py::dict result_dict(SegmentationResult&& r, const VcarParams& params) {
   d["abr_retraced"] = g.abr_retraced;
   d["abr_masks_widened"] = g.abr_masks_widened;
   d["coplanar_dropped"] = g.coplanar_dropped;
+  d["overshoot_eroded"] = g.overshoot_eroded;
   d["masks_missing"] = g.masks_missing;
   d["mask_store_bytes"] = g.mask_store_bytes;
   d["note"] = g.note;

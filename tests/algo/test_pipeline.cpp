@@ -2,11 +2,13 @@
 // whose right answer is known by construction.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
 
 #include "vcar/algo/pipeline.hpp"
+#include "vcar/synth/mask_ops.hpp"
 
 namespace {
 
@@ -378,6 +380,75 @@ TEST_CASE("Eq. R8: ABR reads the training masks widened by their undershoot only
   vcar::VcarParams own_r8_off = lowpass_r8_off;
   own_r8_off.abr_lowpass = false;
   CHECK(full(5, lowpass_r8_off).log_scale != full(5, own_r8_off).log_scale);  // the low-pass matters here
+}
+
+TEST_CASE("Eq. R11: masks that overshoot the render's occlusion edges are eroded; exact ones are not") {
+  // Blob A (radius 0.3, its masks' disc 0.38) with a ring of background Gaussians around its
+  // waist, radius 0.40-0.46 in the plane z = 0 (what touches an object: the table it stands on),
+  // in front of a wall at z = 0.5. Forward rig at z = -4.
+  auto w = two_blobs();
+  std::vector<vcar::Index> shell;
+  {
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> r01(0.f, 1.f);
+    const std::size_t base = w.scene.size();
+    w.scene.resize(base + 200);
+    for (std::size_t i = 0; i < 200; ++i) {
+      const float a = 6.2831853f * r01(rng), r = 0.40f + 0.06f * r01(rng);
+      w.scene.set(base + i, {r * std::cos(a), r * std::sin(a), 0.f}, Eigen::Vector3f::Constant(std::log(0.02f)),
+                  {1, 0, 0, 0}, 2.f);
+      shell.push_back(static_cast<vcar::Index>(base + i));
+    }
+  }
+  const auto cams = forward_rig();
+  // Renders: blob A's disc at depth 4 over the wall at depth 4.5 (the whole scene), or over
+  // nothing (a subset: the fine round's renders of G_coarse).
+  auto renderer = vcar::make_renderer([&](const vcar::RenderRequest& q) {
+    vcar::RenderOutput out;
+    const vcar::Mask disc = blob_a_mask(*q.camera);
+    out.rgb = vcar::ImageF(q.camera->width, q.camera->height, 3, 0.f);
+    out.alpha = vcar::ImageF(q.camera->width, q.camera->height, 1, 0.f);
+    out.depth = vcar::ImageF(q.camera->width, q.camera->height, 1, 0.f);
+    for (std::size_t k = 0; k < disc.data.size(); ++k) {
+      out.alpha.data[k] = disc.data[k] || !q.subset ? 1.f : 0.f;
+      out.depth.data[k] = disc.data[k] ? 4.f : (q.subset ? 0.f : 4.5f);
+    }
+    return out;
+  });
+  int dilate_px = 5;  // the segmenter's disc (11.4 px at depth 4), dilated: the ring (12-14 px) inside
+  auto seg = vcar::make_segmenter([&](const vcar::FrameSequence& f, const vcar::Prompt&) {
+    std::vector<std::optional<vcar::Mask>> masks;
+    for (const auto& c : f.cameras) masks.emplace_back(vcar::synth::dilate_erode(blob_a_mask(c), dilate_px));
+    return masks;
+  });
+  vcar::Prompt prompt;
+  prompt.reference_view = 4;
+  auto run = [&](const vcar::VcarParams& p) { return vcar::segment(w.scene, cams, prompt, renderer, seg, p); };
+  auto holds_any = [](const std::vector<vcar::Index>& got, const std::vector<vcar::Index>& some) {
+    return std::any_of(some.begin(), some.end(), [&](vcar::Index i) { return std::binary_search(got.begin(), got.end(), i); });
+  };
+  auto holds_all = [](const std::vector<vcar::Index>& got, const std::vector<vcar::Index>& all) {
+    return std::all_of(all.begin(), all.end(), [&](vcar::Index i) { return std::binary_search(got.begin(), got.end(), i); });
+  };
+  const vcar::VcarParams robust = vcar::VcarParams::robust();
+  vcar::VcarParams off = robust;
+  off.overshoot_min = 0.f;
+  const vcar::SegmentationResult on_r = run(robust), off_r = run(off);
+  // Without R11 the dilated masks keep the shell; with it every mask is eroded (both rounds),
+  // the shell goes and blob A stays whole.
+  CHECK(holds_any(off_r.indices, shell));
+  CHECK(off_r.diagnostics.overshoot_eroded == 0);
+  CHECK(on_r.diagnostics.overshoot_eroded >= cams.size());
+  CHECK(!holds_any(on_r.indices, shell));
+  CHECK(holds_all(on_r.indices, w.a));
+  // Exact masks: their contour is the render's edge (o_j = 0 < overshoot_min), nothing eroded.
+  dilate_px = 0;
+  const vcar::SegmentationResult exact = run(robust);
+  CHECK(exact.diagnostics.overshoot_eroded == 0);
+  CHECK(exact.indices == run(off).indices);
+  // The paper's presets never erode.
+  dilate_px = 5;
+  CHECK(run(vcar::VcarParams::nvos()).diagnostics.overshoot_eroded == 0);
 }
 
 TEST_CASE("pipeline: bad input and edge cases") {

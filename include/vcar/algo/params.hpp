@@ -124,6 +124,12 @@ struct VcarParams {
   float coplanar_radius = 0.f;
   float coplanar_angle_deg = 5.f;
   float coplanar_slab = 1.f;
+  // Eq. R11: in both rounds, a view's mask whose contour lies o_j >= overshoot_min px outside
+  // the occlusion edges of the view's render (median over the contour; depth steps over
+  // depth_tolerance, the render is asked for depth) is eroded by o_j + overshoot_margin px
+  // before it is voted and kept for ABR; overshoot_min 0 = off.
+  float overshoot_min = 0.f;
+  float overshoot_margin = 1.5f;
 
   // Paper defaults for NVOS (Sec. 4.2).
   static VcarParams nvos() { return VcarParams{}; }
@@ -158,7 +164,8 @@ struct VcarParams {
   // measured undershoot (R6) where the vote without it splits (R6c), the strict threshold 0.85
   // when the fine vote is decisive (R7), ABR on masks widened by their undershoot when it is
   // split, on their own footprints (R8), stages 2-3 again from the coarse vote at 0.3 when it
-  // is split (R9), and hidden candidates on a seen background plane dropped (R10). The edge band
+  // is split (R9), hidden candidates on a seen background plane dropped (R10), and masks that
+  // reach 1 px or more past the render's occlusion edges eroded (R11). The edge band
   // (R1) is off: R6-R7 do its work (docs/results.md, ablation). What vcar::segment uses when
   // given no parameters.
   static VcarParams robust() {
@@ -175,6 +182,7 @@ struct VcarParams {
     p.abr_undershoot = true;
     p.tau_coarse_split = 0.3f;
     p.coplanar_radius = 0.75f;
+    p.overshoot_min = 1.f;
     return p;
   }
   // A preset by name: robust, nvos, lerf, reference_code; vcar::Error otherwise.
@@ -226,7 +234,8 @@ struct VcarParams {
     f("tau_strict", p.tau_strict); f("split_fraction", p.split_fraction); f("abr_lowpass", p.abr_lowpass);
     f("abr_undershoot", p.abr_undershoot); f("tau_coarse_split", p.tau_coarse_split);
     f("coplanar_radius", p.coplanar_radius); f("coplanar_angle_deg", p.coplanar_angle_deg);
-    f("coplanar_slab", p.coplanar_slab);
+    f("coplanar_slab", p.coplanar_slab); f("overshoot_min", p.overshoot_min);
+    f("overshoot_margin", p.overshoot_margin);
   }
 
   // Throws vcar::Error naming the first parameter outside its range.
@@ -275,6 +284,10 @@ struct VcarParams {
     if (!(coplanar_slab >= 0.f && std::isfinite(coplanar_slab))) bad("coplanar_slab", "must be >= 0");
     if (coplanar_radius > 0.f && !coarse_occlusion)
       bad("coplanar_radius", "Eq. R10 reads the coarse round's occlusion test: set coarse_occlusion=true or coplanar_radius=0");
+    if (!(overshoot_min >= 0.f && overshoot_min <= 100.f))
+      bad("overshoot_min", "must be in [0, 100] px (0 = off), got " + std::to_string(overshoot_min));
+    if (!(overshoot_margin >= 0.f && overshoot_margin <= 100.f))
+      bad("overshoot_margin", "must be in [0, 100] px, got " + std::to_string(overshoot_margin));
     if (!(edge_band >= 0.f && edge_band <= 1.f)) bad("edge_band", "must be in [0, 1] (0 = off), got " + std::to_string(edge_band));
   }
 

@@ -23,6 +23,7 @@
 #include "vcar/algo/boundary_refinement.hpp"
 #include "vcar/algo/coplanar_background.hpp"
 #include "vcar/algo/decisive_threshold.hpp"
+#include "vcar/algo/overshoot.hpp"
 #include "vcar/algo/params.hpp"
 #include "vcar/algo/robust_sphere.hpp"
 #include "vcar/algo/spiral_sampler.hpp"
@@ -71,6 +72,7 @@ struct Diagnostics {
   std::size_t abr_retraced = 0;     // flagged candidates refined once more, alone (BoundaryRefinement::defer_tracing)
   std::size_t abr_masks_widened = 0; // training masks ABR read widened by their undershoot (Eq. R8)
   std::size_t coplanar_dropped = 0;  // hidden candidates on a seen background plane, dropped (Eq. R10)
+  std::size_t overshoot_eroded = 0;  // masks voted eroded by their measured overshoot (Eq. R11), every round
   std::size_t masks_missing = 0;    // frames the segmenter answered with "no mask"
   std::size_t mask_store_bytes = 0; // run-length bytes held for ABR
   std::string note;                 // why the pipeline stopped early, if it did
@@ -188,7 +190,8 @@ class RoundVote {
 public:
   RoundVote(const GaussianScene& scene, const std::vector<Index>* candidates, const VcarParams& p, bool fine)
       : occlusion_(p.occlusion_aware || (fine ? p.fine_occlusion : p.coarse_occlusion)),
-        undershoot_(fine && p.undershoot_band > 0.f), gated_(undershoot_ && p.undershoot_gate),
+        overshoot_(p.overshoot_min > 0.f), undershoot_(fine && p.undershoot_band > 0.f),
+        gated_(undershoot_ && p.undershoot_gate),
         undecided_kept_(!fine && p.keep_undecided), keep_unseen_(fine && p.keep_unseen) {
     if (p.robust_vote()) {
       // Eq. R6 needs frames rendered from the candidates alone: the fine round's.
@@ -205,9 +208,13 @@ public:
   std::span<const std::uint16_t> unoccluded_views() const {
     return robust_ ? robust_->unoccluded_views() : std::span<const std::uint16_t>{};
   }
-  // The view's render is needed: depth and alpha for Eq. R3, alpha for Eq. R6.
-  bool wants_depth() const { return occlusion_ || undershoot_; }
+  // The view's render is needed: depth and alpha for Eq. R3 and R11, alpha for Eq. R6.
+  bool wants_depth() const { return occlusion_ || overshoot_ || undershoot_; }
   bool occlusion() const { return occlusion_; }
+  bool overshoot() const { return overshoot_; }
+  // Masks of this round eroded by Eq. R11 (vote() counts them).
+  std::size_t overshoot_eroded() const { return overshoot_eroded_; }
+  void count_overshoot_eroded() { ++overshoot_eroded_; }
   // Eq. R6a of the latest view (0 when R6 is off or the view had no mask or render).
   double last_undershoot_px() const { return robust_ && undershoot_ ? robust_->last_undershoot_px() : 0.0; }
 
@@ -254,20 +261,25 @@ private:
     return tau_strict;
   }
 
-  bool occlusion_, undershoot_, gated_, undecided_kept_, keep_unseen_;
+  bool occlusion_, overshoot_, undershoot_, gated_, undecided_kept_, keep_unseen_;
+  std::size_t overshoot_eroded_ = 0;
   mutable bool undershoot_applied_ = false;
   std::optional<VisibilityVoting> paper_;
   std::optional<RobustVoting> robust_;
 };
 
-// One vote of one view. With the occlusion test the view's expected depth comes from `render`
-// when the round kept it, else it is rendered from the same Gaussians the segmenter saw.
+// One vote of one view. With the occlusion test (or Eq. R11) the view's expected depth comes
+// from `render` when the round kept it, else it is rendered from the same Gaussians the
+// segmenter saw. With Eq. R11 a mask that overshoots the render's occlusion edges is voted
+// eroded (a copy in `scratch`; an erosion that would leave no foreground is not applied).
+// Returns the mask voted (m, &scratch or null): the one the caller keeps for ABR.
 template <Renderer R>
-void vote(RoundVote& voting, const Camera& cam, const Mask* m, const RenderOutput* render,
-          const GaussianScene& scene, const std::vector<Index>* subset, R& renderer, const VcarParams& params) {
+const Mask* vote(RoundVote& voting, const Camera& cam, const Mask* m, const RenderOutput* render,
+                 const GaussianScene& scene, const std::vector<Index>* subset, R& renderer, const VcarParams& params,
+                 Mask& scratch) {
   if (!voting.wants_depth() || !m) {
     voting.add_view(cam, m, nullptr, params.depth_tolerance);
-    return;
+    return m;
   }
   RenderOutput own;
   if (!render || render->depth.empty()) {
@@ -281,7 +293,19 @@ void vote(RoundVote& voting, const Camera& cam, const Mask* m, const RenderOutpu
   }
   if (render->depth.empty() && voting.occlusion())
     throw Error("the occlusion test needs a renderer that returns depth", "view '" + cam.name + "'");
+  if (voting.overshoot() && !render->depth.empty()) {
+    const double o = overshoot_px(*m, render->alpha, render->depth, params.depth_tolerance);  // Eq. R11b
+    if (o >= static_cast<double>(params.overshoot_min)) {
+      scratch = *m;
+      erode_by_overshoot(scratch, o + static_cast<double>(params.overshoot_margin));  // Eq. R11c
+      if (std::any_of(scratch.data.begin(), scratch.data.end(), [](std::uint8_t v) { return v != 0; })) {
+        m = &scratch;
+        voting.count_overshoot_eroded();
+      }
+    }
+  }
   voting.add_view(cam, m, render, params.depth_tolerance);
+  return m;
 }
 
 // The mask, or null when it is below min_mask_fraction (conventions §7: the code drops tiny masks).
@@ -411,11 +435,11 @@ bool refine(const GaussianScene& scene, const std::vector<Camera>& train_cameras
     for (const Camera& c : diag.sampled_cameras) add_frame(c, static_cast<std::size_t>(-1));
     RoundVote fine(scene, &coarse_set, params, true);
     for (auto& m : train_masks) m.reset();
+    Mask scratch;  // a mask eroded by Eq. R11
     const RoundTimes t2 = run_round(
         fine_round, scene, &coarse_set, fine_frames, prompt, renderer, segmenter, params,
         progress, t_start, [&](std::size_t k, const Mask* m, const RenderOutput* render) {
-          m = usable(m, params);
-          vote(fine, fine_frames[k], m, render, scene, &coarse_set, renderer, params);
+          m = vote(fine, fine_frames[k], usable(m, params), render, scene, &coarse_set, renderer, params, scratch);
           if (fine_train[k] < M) {
             keep_training_mask(fine_train[k], m);
             undershoot[order[fine_train[k]]] = m ? fine.last_undershoot_px() : 0.0;
@@ -424,6 +448,7 @@ bool refine(const GaussianScene& scene, const std::vector<Camera>& train_cameras
     timing("fine_render", t2.render);
     timing("fine_segment", t2.total - t2.render - t2.voting);
     timing("fine_voting", t2.voting);
+    diag.overshoot_eroded += fine.overshoot_eroded();
     diag.tau_fine_applied = fine.selected(params.tau_fine, params.tau_strict, params.split_fraction, selected, scores);
     split = diag.tau_fine_applied < params.tau_strict;  // R7 found the vote split
     diag.undershoot_applied = fine.undershoot_applied();
@@ -513,6 +538,7 @@ bool refine_from_coarse(const GaussianScene& scene, const std::vector<Camera>& t
   Diagnostics& d2 = second.diagnostics;
   d2.n_scene = first.n_scene;
   d2.masks_missing = first.masks_missing;
+  d2.overshoot_eroded = first.overshoot_eroded;
   d2.tau_coarse_applied = params.tau_coarse_split;
   train_masks = std::move(coarse_masks);
   complete = refine(scene, train_cameras, prompt, renderer, segmenter, params, progress, t_start, train_masks,
@@ -575,16 +601,17 @@ SegmentationResult segment(const GaussianScene& scene, const std::vector<Camera>
   // with edge_band, Eq. R1-R2).
   stage("coarse");
   detail::RoundVote coarse(scene, nullptr, params, false);
+  Mask scratch;  // a mask eroded by Eq. R11
   const detail::RoundTimes t1 = detail::run_round(
       "coarse round", scene, nullptr, frames, prompt, renderer, segmenter, params, progress,
       t_start, [&](std::size_t k, const Mask* m, const RenderOutput* render) {
-        m = usable(m);
-        detail::vote(coarse, frames[k], m, render, scene, nullptr, renderer, params);
+        m = detail::vote(coarse, frames[k], usable(m), render, scene, nullptr, renderer, params, scratch);
         keep_training_mask(k, m);
       }, diag.masks_missing, coarse.wants_depth());
   timing("coarse_render", t1.render);
   timing("coarse_segment", t1.total - t1.render - t1.voting);
   timing("coarse_voting", t1.voting);
+  diag.overshoot_eroded = coarse.overshoot_eroded();
   const bool complete = detail::refine_from_coarse(
       scene, train_cameras, prompt, renderer, segmenter, params, progress, t_start, train_masks,
       [&](float tau, std::vector<Index>& selected, std::vector<float>& scores) { coarse.selected(tau, selected, scores); },

@@ -1,0 +1,115 @@
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "vcar/algo/overshoot.hpp"
+
+#include "square_mask.hpp"
+
+using vcar::ImageF;
+using vcar::Mask;
+
+namespace {
+// A 20 x 20 render, alpha 1 everywhere: the square [5, 15)^2 at depth 1 in front of a wall at
+// depth `wall` (the depth image holds sum z alpha T = z here).
+struct Render {
+  ImageF alpha, depth;
+};
+Render square_in_front(float wall = 3.f) {
+  Render r{ImageF(20, 20, 1), ImageF(20, 20, 1)};
+  for (int y = 0; y < 20; ++y)
+    for (int x = 0; x < 20; ++x) {
+      const std::size_t q = static_cast<std::size_t>(y) * 20 + x;
+      r.alpha.data[q] = 1.f;
+      r.depth.data[q] = x >= 5 && x < 15 && y >= 5 && y < 15 ? 1.f : wall;
+    }
+  return r;
+}
+std::size_t count(const std::vector<std::uint8_t>& v) {
+  std::size_t n = 0;
+  for (auto b : v) n += b != 0;
+  return n;
+}
+}  // namespace
+
+TEST_CASE("Eq. R11a by hand: the near side of a depth step or of an empty pixel") {
+  const Render r = square_in_front();
+  const std::vector<std::uint8_t> e = vcar::occlusion_edges(r.alpha, r.depth, 0.05f);
+  auto at = [&](int x, int y) { return e[static_cast<std::size_t>(y) * 20 + x]; };
+  CHECK(count(e) == 36);  // the square's border ring: 10 x 10 - 8 x 8
+  CHECK(at(5, 5) == 1);
+  CHECK(at(14, 9) == 1);
+  CHECK(at(6, 6) == 0);   // inside: every neighbour at the same depth
+  CHECK(at(4, 9) == 0);   // the wall next to the square: its neighbour is nearer, not farther
+  // A step under the tolerance is no edge: 3 <= 1 * (1 + 2.5).
+  CHECK(count(vcar::occlusion_edges(r.alpha, r.depth, 2.5f)) == 0);
+  // A pixel with no surface (alpha < 0.5) is infinitely far: its neighbours with a surface are
+  // edges; it is none itself.
+  Render hole = square_in_front();
+  hole.alpha.data[2 * 20 + 2] = 0.2f;
+  const std::vector<std::uint8_t> h = vcar::occlusion_edges(hole.alpha, hole.depth, 0.05f);
+  CHECK(count(h) == 36 + 4);
+  CHECK(h[2 * 20 + 2] == 0);
+  CHECK(h[2 * 20 + 3] == 1);
+  CHECK(h[1 * 20 + 2] == 1);
+}
+
+TEST_CASE("Eq. R11b by hand: a mask on the edge reads 0, a dilated one its dilation, an eroded one minus") {
+  const Render r = square_in_front();
+  // The square itself: every contour pixel is an edge pixel inside the mask.
+  CHECK(vcar::overshoot_px(square_mask(20, 20, 5, 5, 15, 15), r.alpha, r.depth, 0.05f) == 0.0);
+  // Dilated by 2 (the square [3, 17)^2): of each side's 14 contour pixels, 10 are 2 px from the
+  // square's border, 2 are sqrt 5 and 2 are sqrt 8 (the corners) away: the median is 2.
+  CHECK(vcar::overshoot_px(square_mask(20, 20, 3, 3, 17, 17), r.alpha, r.depth, 0.05f) == 2.0);
+  // Eroded by 2 (the square [7, 13)^2): no edge inside the mask; the border lies 2 px outside
+  // every contour pixel but the corners (sqrt 8): -2.
+  CHECK(vcar::overshoot_px(square_mask(20, 20, 7, 7, 13, 13), r.alpha, r.depth, 0.05f) == -2.0);
+  // Nothing to measure: no mask, or a render without an occlusion edge.
+  CHECK(vcar::overshoot_px(Mask(20, 20, 1), r.alpha, r.depth, 0.05f) == 0.0);
+  const Render flat = square_in_front(1.f);
+  CHECK(vcar::overshoot_px(square_mask(20, 20, 3, 3, 17, 17), flat.alpha, flat.depth, 0.05f) == 0.0);
+}
+
+TEST_CASE("Eq. R11b is a median: a nearer neighbour along one side does not move it") {
+  // A nearer object [15, 19) x [5, 15) (depth 0.5) touches the square's right side: there the
+  // square is the far side and no edge; the neighbour's own border is. The dilated mask's right
+  // contour reads 0-1 px (12 pixels), the three other sides still 2 (34) or more (6): median 2.
+  Render r = square_in_front();
+  for (int y = 5; y < 15; ++y)
+    for (int x = 15; x < 19; ++x) r.depth.data[static_cast<std::size_t>(y) * 20 + x] = 0.5f;
+  CHECK(vcar::overshoot_px(square_mask(20, 20, 3, 3, 17, 17), r.alpha, r.depth, 0.05f) == 2.0);
+}
+
+TEST_CASE("Eq. R11c by hand: erosion keeps the pixels farther than e from the background") {
+  Mask m = square_mask(20, 20, 3, 3, 17, 17);
+  vcar::erode_by_overshoot(m, 2.0);  // (4, y) is 2 px from (2, y): removed; (5, y) 3 px: kept
+  CHECK(m.data == square_mask(20, 20, 5, 5, 15, 15).data);
+  Mask half = square_mask(20, 20, 3, 3, 17, 17);
+  vcar::erode_by_overshoot(half, 1.5);  // the ring at distance 1 goes, (4, y) at 2 stays
+  CHECK(half.data == square_mask(20, 20, 4, 4, 16, 16).data);
+  // Brute force against the definition on an irregular mask.
+  Mask blob(13, 11, 1);
+  for (int y = 0; y < 11; ++y)
+    for (int x = 0; x < 13; ++x) blob.data[static_cast<std::size_t>(y) * 13 + x] = (x * 7 + y * 3) % 11 < 8 ? 255 : 0;
+  Mask eroded = blob;
+  const double e = 1.2;
+  vcar::erode_by_overshoot(eroded, e);
+  for (int y = 0; y < 11; ++y)
+    for (int x = 0; x < 13; ++x) {
+      double best = INFINITY;
+      for (int v = 0; v < 11; ++v)
+        for (int u = 0; u < 13; ++u)
+          if (!blob.data[static_cast<std::size_t>(v) * 13 + u]) best = std::min(best, std::hypot(u - x, v - y));
+      const bool keep = blob.data[static_cast<std::size_t>(y) * 13 + x] && best > e;
+      CHECK((eroded.data[static_cast<std::size_t>(y) * 13 + x] != 0) == keep);
+    }
+  // The image border is not background: a full mask stays full; e <= 0 changes nothing.
+  Mask full = square_mask(6, 6, 0, 0, 6, 6);
+  vcar::erode_by_overshoot(full, 3.0);
+  CHECK(full.data == square_mask(6, 6, 0, 0, 6, 6).data);
+  Mask same = square_mask(20, 20, 3, 3, 17, 17);
+  vcar::erode_by_overshoot(same, 0.0);
+  CHECK(same.data == square_mask(20, 20, 3, 3, 17, 17).data);
+}
