@@ -28,10 +28,11 @@
 // (o_min = overshoot_min, 1 px; m = overshoot_margin, 1.5 px: part of the splats' extent that
 // the dilated contour also holds). Measured o_j per view (forward, orbit, sparse and
 // hemisphere rigs, 3 seeds, 160 x 120, the coarse round's renders of the scene): clean masks
-// median -1 to -5.4, dilated by 2 px 0 to 1, by 4 px 1.4 to 2.8. O(W H) per view: three exact
-// distance transforms (two to measure, one to erode).
+// median -1 to -5.4, dilated by 2 px 0 to 1, by 4 px 1.4 to 2.8. Per view: three exact distance
+// transforms, two over the image to measure, one over the mask's bounding box to erode.
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -40,22 +41,56 @@
 
 namespace vcar {
 
-// Eq. R11a: 1 where pixel p of the render (alpha, expected depth sum z alpha T; same size, one
-// channel each) is the near side of an occlusion edge with relative depth step delta.
-inline std::vector<std::uint8_t> occlusion_edges(const ImageF& alpha, const ImageF& depth, float delta) {
+namespace detail {  // vcar::detail
+// The pixel rectangle [x0, x1) x [y0, y1) of an image.
+struct PixelBox {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  int width() const { return x1 - x0; }
+  int height() const { return y1 - y0; }
+};
+// The bounding box of m's foreground grown by `grow` px on every side and clipped to the image;
+// empty (x0 == x1) without foreground.
+inline PixelBox foreground_box(const Mask& m, int grow) {
+  PixelBox b{m.width, m.height, 0, 0};
+  for (int y = 0; y < m.height; ++y)
+    for (int x = 0; x < m.width; ++x)
+      if (m.data[static_cast<std::size_t>(y) * m.width + x]) {
+        b.x0 = std::min(b.x0, x), b.y0 = std::min(b.y0, y);
+        b.x1 = std::max(b.x1, x + 1), b.y1 = std::max(b.y1, y + 1);
+      }
+  if (b.x1 == 0) return {};
+  return {std::max(0, b.x0 - grow), std::max(0, b.y0 - grow), std::min(m.width, b.x1 + grow),
+          std::min(m.height, b.y1 + grow)};
+}
+// squared_distance_to over the box only: seed(x, y) for the box's pixels, distances by box pixel.
+template <class Seed>
+std::vector<double> squared_distance_in(const PixelBox& b, Seed&& seed) {
+  std::vector<std::uint8_t> s(static_cast<std::size_t>(b.width()) * b.height());
+  for (int y = b.y0; y < b.y1; ++y)
+    for (int x = b.x0; x < b.x1; ++x) s[static_cast<std::size_t>(y - b.y0) * b.width() + (x - b.x0)] = seed(x, y);
+  return squared_distance_to(s, b.width(), b.height());
+}
+}  // namespace detail
+
+// Eq. R11a at pixel (x, y) of the render (alpha, expected depth sum z alpha T): the near side
+// of an occlusion edge with relative depth step delta.
+inline bool occlusion_edge_at(const ImageF& alpha, const ImageF& depth, float delta, int x, int y) {
   const int W = alpha.width, H = alpha.height;
-  const std::size_t n = alpha.data.size();
-  std::vector<float> d(n);
-  for (std::size_t q = 0; q < n; ++q) d[q] = alpha.data[q] >= 0.5f ? depth.data[q] / alpha.data[q] : INFINITY;
-  std::vector<std::uint8_t> e(n, 0);
-  for (int y = 0; y < H; ++y)
-    for (int x = 0; x < W; ++x) {
-      const std::size_t q = static_cast<std::size_t>(y) * W + x;
-      if (!(alpha.data[q] >= 0.5f)) continue;
-      const float far = d[q] * (1.f + delta);  // a neighbour with no surface has d = +inf
-      e[q] = (x > 0 && d[q - 1] > far) || (x + 1 < W && d[q + 1] > far) ||
-             (y > 0 && d[q - W] > far) || (y + 1 < H && d[q + W] > far);
-    }
+  const std::size_t q = static_cast<std::size_t>(y) * W + x;
+  if (!(alpha.data[q] >= 0.5f)) return false;
+  auto far_side = [&](std::size_t r) {  // a neighbour with no surface is infinitely far
+    return !(alpha.data[r] >= 0.5f) || depth.data[r] / alpha.data[r] > depth.data[q] / alpha.data[q] * (1.f + delta);
+  };
+  return (x > 0 && far_side(q - 1)) || (x + 1 < W && far_side(q + 1)) || (y > 0 && far_side(q - W)) ||
+         (y + 1 < H && far_side(q + W));
+}
+
+// Eq. R11a over the whole render: 1 where the pixel is the near side of an occlusion edge.
+inline std::vector<std::uint8_t> occlusion_edges(const ImageF& alpha, const ImageF& depth, float delta) {
+  std::vector<std::uint8_t> e(alpha.data.size(), 0);
+  for (int y = 0; y < alpha.height; ++y)
+    for (int x = 0; x < alpha.width; ++x)
+      e[static_cast<std::size_t>(y) * alpha.width + x] = occlusion_edge_at(alpha, depth, delta, x, y);
   return e;
 }
 
@@ -88,14 +123,21 @@ inline double overshoot_px(const Mask& m, const ImageF& alpha, const ImageF& dep
 }
 
 // Eq. R11c: erodes m (in place) by e px: a foreground pixel stays only when its distance to the
-// nearest background pixel of the image is above e (pixels outside the image do not count).
+// nearest background pixel of the image is above e (pixels outside the image do not count). The
+// distance transform runs over the foreground's bounding box grown by 1 px: the nearest
+// background pixel of any foreground pixel lies in it.
 inline void erode_by_overshoot(Mask& m, double e) {
   if (!(e > 0.0)) return;
-  std::vector<std::uint8_t> background(m.data.size());
-  for (std::size_t q = 0; q < m.data.size(); ++q) background[q] = !m.data[q];
-  const std::vector<double> d2 = squared_distance_to(background, m.width, m.height);
-  for (std::size_t q = 0; q < m.data.size(); ++q)
-    if (m.data[q] && !(d2[q] > e * e)) m.data[q] = 0;
+  const detail::PixelBox b = detail::foreground_box(m, 1);
+  if (b.width() <= 0) return;
+  const int W = m.width;
+  const std::vector<double> d2 = detail::squared_distance_in(
+      b, [&](int x, int y) { return m.data[static_cast<std::size_t>(y) * W + x] == 0; });
+  for (int y = b.y0; y < b.y1; ++y)
+    for (int x = b.x0; x < b.x1; ++x) {
+      std::uint8_t& v = m.data[static_cast<std::size_t>(y) * W + x];
+      if (v && !(d2[static_cast<std::size_t>(y - b.y0) * b.width() + (x - b.x0)] > e * e)) v = 0;
+    }
 }
 
 }  // namespace vcar
