@@ -89,6 +89,10 @@ def test_oracle_identical_to_cli(cli_dataset, tmp_path, preset):
     assert d["coplanar_dropped"] == report["coplanar_dropped"]
     if preset != "robust":
         assert d["coplanar_dropped"] == 0
+    # Eq. R11: masks eroded by their measured overshoot, by the robust preset only.
+    assert d["overshoot_eroded"] == report["overshoot_eroded"]
+    if preset != "robust":
+        assert d["overshoot_eroded"] == 0
 
 
 def test_masks_identical_to_cli_with_python_segmenter(cli_dataset, tmp_path):
