@@ -425,10 +425,12 @@ TEST_CASE("Eq. R11: masks that overshoot the render's occlusion edges are eroded
   prompt.reference_view = 4;
   auto run = [&](const vcar::VcarParams& p) { return vcar::segment(w.scene, cams, prompt, renderer, seg, p); };
   auto holds_any = [](const std::vector<vcar::Index>& got, const std::vector<vcar::Index>& some) {
-    return std::any_of(some.begin(), some.end(), [&](vcar::Index i) { return std::binary_search(got.begin(), got.end(), i); });
+    return std::any_of(some.begin(), some.end(),
+                       [&](vcar::Index i) { return std::binary_search(got.begin(), got.end(), i); });
   };
   auto holds_all = [](const std::vector<vcar::Index>& got, const std::vector<vcar::Index>& all) {
-    return std::all_of(all.begin(), all.end(), [&](vcar::Index i) { return std::binary_search(got.begin(), got.end(), i); });
+    return std::all_of(all.begin(), all.end(),
+                       [&](vcar::Index i) { return std::binary_search(got.begin(), got.end(), i); });
   };
   const vcar::VcarParams robust = vcar::VcarParams::robust();
   vcar::VcarParams off = robust;

@@ -34,10 +34,12 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "vcar/core/distance_transform.hpp"
 #include "vcar/core/image.hpp"
+#include "vcar/core/mask_contour.hpp"
 
 namespace vcar {
 
@@ -105,21 +107,10 @@ inline double overshoot_px(const Mask& m, const ImageF& alpha, const ImageF& dep
     out[q] = edge[q] && !m.data[q];
   }
   const std::vector<double> d_in = squared_distance_to(in, W, H), d_out = squared_distance_to(out, W, H);
-  std::vector<double> s;
-  const std::uint8_t* M = m.data.data();
-  for (int y = 0; y < H; ++y)
-    for (int x = 0; x < W; ++x) {
-      const std::size_t q = static_cast<std::size_t>(y) * W + x;
-      if (!M[q]) continue;
-      const bool contour = (x > 0 && !M[q - 1]) || (x + 1 < W && !M[q + 1]) ||
-                           (y > 0 && !M[q - W]) || (y + 1 < H && !M[q + W]);
-      if (!contour || !(std::isfinite(d_in[q]) || std::isfinite(d_out[q]))) continue;
-      s.push_back(d_in[q] <= d_out[q] ? std::sqrt(d_in[q]) : -std::sqrt(d_out[q]));
-    }
-  if (s.empty()) return 0.0;
-  const auto mid = s.begin() + static_cast<std::ptrdiff_t>(s.size() / 2);
-  std::nth_element(s.begin(), mid, s.end());
-  return *mid;
+  return contour_median(m, [&](std::size_t q) {  // s(c); no edge pixel at all: no value
+    if (!(std::isfinite(d_in[q]) || std::isfinite(d_out[q]))) return std::numeric_limits<double>::quiet_NaN();
+    return d_in[q] <= d_out[q] ? std::sqrt(d_in[q]) : -std::sqrt(d_out[q]);
+  });
 }
 
 // Eq. R11c: erodes m (in place) by e px: a foreground pixel stays only when its distance to the

@@ -22,10 +22,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "vcar/core/distance_transform.hpp"
 #include "vcar/core/image.hpp"
+#include "vcar/core/mask_contour.hpp"
 
 namespace vcar {
 
@@ -36,20 +38,9 @@ inline double undershoot_px(const Mask& m, const ImageF& alpha) {
   std::vector<std::uint8_t> render_bg(m.data.size());
   for (std::size_t q = 0; q < render_bg.size(); ++q) render_bg[q] = !(alpha.data[q] >= 0.5f);
   const std::vector<double> d2 = squared_distance_to(render_bg, W, H);
-  std::vector<double> e;
-  const std::uint8_t* M = m.data.data();
-  for (int y = 0; y < H; ++y)
-    for (int x = 0; x < W; ++x) {
-      const std::size_t q = static_cast<std::size_t>(y) * W + x;
-      if (!M[q]) continue;
-      const bool contour = (x > 0 && !M[q - 1]) || (x + 1 < W && !M[q + 1]) ||
-                           (y > 0 && !M[q - W]) || (y + 1 < H && !M[q + W]);
-      if (contour && std::isfinite(d2[q])) e.push_back(std::max(0.0, std::sqrt(d2[q]) - 1.0));
-    }
-  if (e.empty()) return 0.0;
-  const auto mid = e.begin() + static_cast<std::ptrdiff_t>(e.size() / 2);
-  std::nth_element(e.begin(), mid, e.end());
-  return *mid;
+  return contour_median(m, [&](std::size_t q) {
+    return std::isfinite(d2[q]) ? std::max(0.0, std::sqrt(d2[q]) - 1.0) : std::numeric_limits<double>::quiet_NaN();
+  });
 }
 
 namespace detail {  // vcar::detail
