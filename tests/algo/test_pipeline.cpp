@@ -416,9 +416,11 @@ TEST_CASE("Eq. R11: masks that overshoot the render's occlusion edges are eroded
     return out;
   });
   int dilate_px = 5;  // the segmenter's disc (11.4 px at depth 4), dilated: the ring (12-14 px) inside
+  bool fine_only = false;  // dilate only the fine round's masks (renders of a subset)
   auto seg = vcar::make_segmenter([&](const vcar::FrameSequence& f, const vcar::Prompt&) {
     std::vector<std::optional<vcar::Mask>> masks;
-    for (const auto& c : f.cameras) masks.emplace_back(vcar::synth::dilate_erode(blob_a_mask(c), dilate_px));
+    for (const auto& c : f.cameras)
+      masks.emplace_back(vcar::synth::dilate_erode(blob_a_mask(c), fine_only && !f.subset ? 0 : dilate_px));
     return masks;
   });
   vcar::Prompt prompt;
@@ -451,6 +453,12 @@ TEST_CASE("Eq. R11: masks that overshoot the render's occlusion edges are eroded
   // The paper's presets never erode.
   dilate_px = 5;
   CHECK(run(vcar::VcarParams::nvos()).diagnostics.overshoot_eroded == 0);
+  // The fine round applies R11 only after the coarse round found overshooting masks: with exact
+  // coarse masks its dilated masks are voted as they are (they add nothing outside G_coarse).
+  fine_only = true;
+  const vcar::SegmentationResult fine_dilated = run(robust);
+  CHECK(fine_dilated.diagnostics.overshoot_eroded == 0);
+  CHECK(fine_dilated.indices == run(off).indices);
 }
 
 TEST_CASE("pipeline: bad input and edge cases") {

@@ -1,7 +1,7 @@
 #pragma once
 // Beyond the paper: a mask that overshoots the object is eroded by its measured overshoot
-// (docs/robust.md, Eq. R11). Used in both rounds, on views the library renders itself with
-// depth (the coarse round's renders of the scene, the fine round's of G_coarse).
+// (docs/robust.md, Eq. R11). Used in the coarse round, on the renders of the whole scene, and
+// in the fine round (renders of G_coarse) only after the coarse round eroded some mask.
 //
 // A segmenter that overshoots (a dilated mask) puts a shell of background around the object in
 // every view: the table under it, the neighbour's near side. Those Gaussians project inside

@@ -124,10 +124,11 @@ struct VcarParams {
   float coplanar_radius = 0.f;
   float coplanar_angle_deg = 5.f;
   float coplanar_slab = 1.f;
-  // Eq. R11: in both rounds, a view's mask whose contour lies o_j >= overshoot_min px outside
-  // the occlusion edges of the view's render (median over the contour; depth steps over
-  // depth_tolerance, the render is asked for depth) is eroded by o_j + overshoot_margin px
-  // before it is voted and kept for ABR; overshoot_min 0 = off.
+  // Eq. R11: a view's mask whose contour lies o_j >= overshoot_min px outside the occlusion
+  // edges of the view's render (median over the contour; depth steps over depth_tolerance, the
+  // render is asked for depth) is eroded by o_j + overshoot_margin px before it is voted and
+  // kept for ABR: in the coarse round, and in the fine round once the coarse round eroded a
+  // mask; overshoot_min 0 = off.
   float overshoot_min = 0.f;
   float overshoot_margin = 1.5f;
 

@@ -214,6 +214,8 @@ public:
   bool overshoot() const { return overshoot_; }
   // Masks of this round eroded by Eq. R11 (vote() counts them).
   std::size_t overshoot_eroded() const { return overshoot_eroded_; }
+  // Switches Eq. R11 off for this round (before its first view).
+  void no_overshoot() { overshoot_ = false; }
   void count_overshoot_eroded() { ++overshoot_eroded_; }
   // Eq. R6a of the latest view (0 when R6 is off or the view had no mask or render).
   double last_undershoot_px() const { return robust_ && undershoot_ ? robust_->last_undershoot_px() : 0.0; }
@@ -434,6 +436,10 @@ bool refine(const GaussianScene& scene, const std::vector<Camera>& train_cameras
     for (std::size_t k = 0; k < frames.size(); ++k) add_frame(frames[k], k);
     for (const Camera& c : diag.sampled_cameras) add_frame(c, static_cast<std::size_t>(-1));
     RoundVote fine(scene, &coarse_set, params, true);
+    // Eq. R11 in the fine round only after the coarse round found masks overshooting the renders
+    // of the whole scene: this round renders G_coarse, which the masks shaped, so masks that
+    // undershoot would read as overshooting a G_coarse they eroded.
+    if (diag.overshoot_eroded == 0) fine.no_overshoot();
     for (auto& m : train_masks) m.reset();
     Mask scratch;  // a mask eroded by Eq. R11
     const RoundTimes t2 = run_round(
