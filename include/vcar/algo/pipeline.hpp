@@ -273,7 +273,9 @@ private:
 // One vote of one view. With the occlusion test (or Eq. R11) the view's expected depth comes
 // from `render` when the round kept it, else it is rendered from the same Gaussians the
 // segmenter saw. With Eq. R11 a mask that overshoots the render's occlusion edges is voted
-// eroded (a copy in `scratch`; an erosion that would leave no foreground is not applied).
+// eroded (a copy in `scratch`; an erosion that would take more than three quarters of the
+// mask's foreground is not applied: structures thinner than the erosion, or a mask of scattered
+// specks, are not what a dilated object looks like).
 // Returns the mask voted (m, &scratch or null): the one the caller keeps for ABR.
 template <Renderer R>
 const Mask* vote(RoundVote& voting, const Camera& cam, const Mask* m, const RenderOutput* render,
@@ -300,7 +302,10 @@ const Mask* vote(RoundVote& voting, const Camera& cam, const Mask* m, const Rend
     if (o >= static_cast<double>(params.overshoot_min)) {
       scratch = *m;
       erode_by_overshoot(scratch, o + static_cast<double>(params.overshoot_margin));  // Eq. R11c
-      if (std::any_of(scratch.data.begin(), scratch.data.end(), [](std::uint8_t v) { return v != 0; })) {
+      auto foreground = [](const Mask& x) {
+        return std::count_if(x.data.begin(), x.data.end(), [](std::uint8_t v) { return v != 0; });
+      };
+      if (4 * foreground(scratch) >= foreground(*m)) {  // thin or scattered masks are kept as they are
         m = &scratch;
         voting.count_overshoot_eroded();
       }
