@@ -141,12 +141,12 @@ struct Options {
 const std::vector<std::string> kPeers = {"naive", "sagd", "flashsplat", "gaussiancut", "ludvig", "lbg"};
 const std::vector<std::string> kVariants = {"coarse", "sss", "abr", "full", "occlusion", "gapdir", "robust"};
 // The robust preset with one mechanism changed each (docs/robust.md ablation): off, or for the
-// edge band R1 (off in robust) on.
+// edge band R1 and the second coarse threshold R9 (off in robust) on.
 const std::vector<std::string> kRobustAblation = {"robust-band", "robust-noocc", "robust-nokeep",
                                                   "robust-nolowpass", "robust-tau08", "robust-nofs",
                                                   "robust-noundershoot", "robust-nostrict", "robust-noabru",
-                                                  "robust-nocoarse2", "robust-nocoplanar", "robust-nogate",
-                                                  "robust-noovershoot"};
+                                                  "robust-coarse2", "robust-nocoplanar", "robust-nogate",
+                                                  "robust-noovershoot", "robust-nogrow"};
 
 std::vector<std::string> all_methods(bool variants = true) {
   std::vector<std::string> m = kPeers;
@@ -186,10 +186,11 @@ VcarParams vcar_params(const std::string& variant, const Experiment& e, const st
     else if (variant == "robust-noundershoot") p.undershoot_band = 0.f;
     else if (variant == "robust-nostrict") p.tau_strict = 0.f;
     else if (variant == "robust-noabru") p.abr_undershoot = false;
-    else if (variant == "robust-nocoarse2") p.tau_coarse_split = 0.f;
+    else if (variant == "robust-coarse2") p.tau_coarse_split = 0.3f;
     else if (variant == "robust-nocoplanar") p.coplanar_radius = 0.f;
     else if (variant == "robust-nogate") p.undershoot_gate = false;
     else if (variant == "robust-noovershoot") p.overshoot_min = 0.f;
+    else if (variant == "robust-nogrow") p.grow_max = 0.f;
     else if (variant != "robust") throw Error("unknown variant '" + variant + "'", "--methods");
     if (e.failure == "tau") { p.tau_coarse = static_cast<float>(e.level); p.tau_fine = static_cast<float>(e.level); }
     for (const std::string& kv : set) io::set_parameter(p, kv);

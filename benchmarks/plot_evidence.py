@@ -25,8 +25,8 @@ RIGS = ["forward", "orbit", "sparse", "hemisphere"]
 PEERS = ["naive", "sagd", "flashsplat", "gaussiancut", "ludvig", "lbg"]
 VARIANTS = ["coarse", "sss", "abr", "full", "occlusion", "gapdir", "robust"]
 ROBUST_ABLATION = ["robust-band", "robust-noocc", "robust-nokeep", "robust-nolowpass", "robust-tau08", "robust-nofs",
-                   "robust-noundershoot", "robust-nostrict", "robust-noabru", "robust-nocoarse2", "robust-nocoplanar",
-                   "robust-nogate", "robust-noovershoot"]
+                   "robust-noundershoot", "robust-nostrict", "robust-noabru", "robust-coarse2", "robust-nocoplanar",
+                   "robust-nogate", "robust-noovershoot", "robust-nogrow"]
 TARGETS = ["sphere", "torus", "cylinder", "box"]
 NUM = {"seed", "gaussians", "object_gaussians", "level", "width", "height", "n_train", "n_eval", "miou", "macc",
        "miou_01", "macc_01", "boundary_iou", "boundary_f1", "trimap_iou", "f1_3d", "precision_3d", "recall_3d",
@@ -82,10 +82,11 @@ def label(key):
             "vcar:robust-noundershoot": "robust - undershoot band (R6)",
             "vcar:robust-nostrict": "robust - decisive threshold (R7)",
             "vcar:robust-noabru": "robust - undershoot ABR (R8)",
-            "vcar:robust-nocoarse2": "robust - second coarse threshold (R9)",
+            "vcar:robust-coarse2": "robust + second coarse threshold (R9)",
             "vcar:robust-nocoplanar": "robust - hidden on a background plane (R10)",
             "vcar:robust-nogate": "robust - R6's gate (R6c)",
-            "vcar:robust-noovershoot": "robust - R11 overshoot erosion"}.get(key, key)
+            "vcar:robust-noovershoot": "robust - R11 overshoot erosion",
+            "vcar:robust-nogrow": "robust - R12 growth to occlusion edges"}.get(key, key)
 
 
 STYLE = {}

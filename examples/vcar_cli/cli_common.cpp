@@ -482,6 +482,10 @@ std::string summary_text(const Diagnostics& d, const VcarParams& p, std::size_t 
                   d.overshoot_eroded);
     s += buf;
   }
+  if (d.masks_grown > 0) {  // Eq. R12 ran
+    std::snprintf(buf, sizeof buf, "undershoot %zu masks grown to the render's occlusion edges (Eq. R12)\n", d.masks_grown);
+    s += buf;
+  }
   if (p.coplanar_radius > 0.f && d.coplanar_dropped > 0) {  // Eq. R10 ran
     std::snprintf(buf, sizeof buf, "hidden    %zu Gaussians dropped: unseen, on a seen background plane (Eq. R10)\n",
                   d.coplanar_dropped);
@@ -561,6 +565,7 @@ nlohmann::json write_segmentation(const std::filesystem::path& out, const Gaussi
       {"abr", {{"flagged", d.abr_flagged}, {"compressed", d.abr_compressed}, {"retraced", d.abr_retraced}, {"masks_widened", d.abr_masks_widened}}},
       {"coplanar_dropped", d.coplanar_dropped},
       {"overshoot_eroded", d.overshoot_eroded},
+      {"masks_grown", d.masks_grown},
       {"masks_missing", d.masks_missing},
       {"note", d.note},
       {"timings_s", timings},

@@ -241,6 +241,7 @@ int run_segment_objects(const SegmentOptions& o, const GlobalOptions& g) {
                            {"sampled_views", d.sampled_cameras.size()},
                            {"abr", {{"flagged", d.abr_flagged}, {"compressed", d.abr_compressed}, {"retraced", d.abr_retraced}, {"masks_widened", d.abr_masks_widened}}},
                            {"coplanar_dropped", d.coplanar_dropped}, {"overshoot_eroded", d.overshoot_eroded},
+                           {"masks_grown", d.masks_grown},
                            {"masks_missing", d.masks_missing}, {"note", d.note}, {"timings_s", timings},
                            {"output", "objects/" + objects[k].name + ".ply"}});
   }

@@ -217,6 +217,7 @@ MultiSegmentation segment_objects(const GaussianScene& scene, const std::vector<
     detail_multi::OneObject one{&segmenter, ObjectRequest{o, objects[o].name, objects[o].prompt}};
     const auto to = Clock::now();
     out.objects[o].diagnostics.overshoot_eroded = votes[o]->overshoot_eroded();
+    out.objects[o].diagnostics.masks_grown = votes[o]->grown();
     // Stages 2 and 3 exactly as vcar::segment runs them after its coarse vote (Eq. R9 included).
     vcar::detail::refine_from_coarse(
         scene, train_cameras, objects[o].prompt, renderer, one, params, progress, t_start, train_masks[o],

@@ -334,6 +334,7 @@ py::dict result_dict(SegmentationResult&& r, const VcarParams& params) {
   d["abr_masks_widened"] = g.abr_masks_widened;
   d["coplanar_dropped"] = g.coplanar_dropped;
   d["overshoot_eroded"] = g.overshoot_eroded;
+  d["masks_grown"] = g.masks_grown;
   d["masks_missing"] = g.masks_missing;
   d["mask_store_bytes"] = g.mask_store_bytes;
   d["note"] = g.note;

@@ -93,6 +93,10 @@ def test_oracle_identical_to_cli(cli_dataset, tmp_path, preset):
     assert d["overshoot_eroded"] == report["overshoot_eroded"]
     if preset != "robust":
         assert d["overshoot_eroded"] == 0
+    # Eq. R12: coarse-round masks grown to the render's occlusion edges, by the robust preset only.
+    assert d["masks_grown"] == report["masks_grown"]
+    if preset != "robust":
+        assert d["masks_grown"] == 0
 
 
 def test_masks_identical_to_cli_with_python_segmenter(cli_dataset, tmp_path):

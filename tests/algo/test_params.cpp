@@ -81,8 +81,9 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
   CHECK(r.tau_strict > r.tau_fine);
   CHECK(r.abr_lowpass);  // as the paper; R8 reads own footprints after a split vote
   CHECK(r.abr_undershoot);  // R8
-  CHECK(r.tau_coarse_split > 0.f);  // R9
-  CHECK(r.tau_coarse_split < r.tau_coarse);
+  CHECK(r.tau_coarse_split == 0.f);  // R9: a switch only since R12 (docs/robust.md)
+  CHECK(r.overshoot_min > 0.f);      // R11
+  CHECK(r.grow_max > 0.f);           // R12
   CHECK(r.kappa == 2.f);
   CHECK(r.robust_vote());
   CHECK_NOTHROW(r.validate());
@@ -96,6 +97,8 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
     CHECK(p.abr_lowpass);
     CHECK_FALSE(p.abr_undershoot);
     CHECK(p.tau_coarse_split == 0.f);  // Eq. R9 off
+    CHECK(p.overshoot_min == 0.f);     // Eq. R11 off
+    CHECK(p.grow_max == 0.f);          // Eq. R12 off
   }
   CHECK(VcarParams::reference_code().force_fine_round);
   CHECK_FALSE(VcarParams::nvos().force_fine_round);

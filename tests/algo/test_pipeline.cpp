@@ -323,6 +323,8 @@ TEST_CASE("Eq. R8: ABR reads the training masks widened by their undershoot only
   erode_coarse = 2;
   p = vcar::VcarParams::robust();
   p.force_fine_round = true;
+  p.tau_coarse_split = 0.3f;  // R9, a switch (off in robust since R12)
+  p.grow_max = 0.f;           // R12 would grow the eroded coarse masks back
   auto full = [&](int px, const vcar::VcarParams& q) {
     erode = px;
     return vcar::segment(w.scene, cams, prompt, renderer, seg, q);
@@ -459,6 +461,54 @@ TEST_CASE("Eq. R11: masks that overshoot the render's occlusion edges are eroded
   const vcar::SegmentationResult fine_dilated = run(robust);
   CHECK(fine_dilated.diagnostics.overshoot_eroded == 0);
   CHECK(fine_dilated.indices == run(off).indices);
+}
+
+TEST_CASE("Eq. R12: coarse-round masks that stop short of the render's occlusion edges grow to them") {
+  // Blob A (radius 0.3: centres up to 9 px from its centre at depth 4) seen through masks of its
+  // disc (11.4 px) eroded by 4 px in the coarse round (the fine round's are exact): its rim lies
+  // outside every training mask, and G_coarse lacks it. The render of the whole
+  // scene shows the disc at depth 4 in front of a wall at 4.5, so the gap between each mask and
+  // the disc's edge is depth-continuous and the mask grows back to the disc.
+  auto w = two_blobs();
+  const auto cams = forward_rig();
+  auto renderer = vcar::make_renderer([&](const vcar::RenderRequest& q) {
+    vcar::RenderOutput out;
+    const vcar::Mask disc = blob_a_mask(*q.camera);
+    out.rgb = vcar::ImageF(q.camera->width, q.camera->height, 3, 0.f);
+    out.alpha = vcar::ImageF(q.camera->width, q.camera->height, 1, 0.f);
+    out.depth = vcar::ImageF(q.camera->width, q.camera->height, 1, 0.f);
+    for (std::size_t k = 0; k < disc.data.size(); ++k) {
+      out.alpha.data[k] = disc.data[k] || !q.subset ? 1.f : 0.f;
+      out.depth.data[k] = disc.data[k] ? 4.f : (q.subset ? 0.f : 4.5f);
+    }
+    return out;
+  });
+  auto seg = vcar::make_segmenter([&](const vcar::FrameSequence& f, const vcar::Prompt&) {
+    std::vector<std::optional<vcar::Mask>> masks;
+    for (const auto& c : f.cameras) masks.emplace_back(vcar::synth::dilate_erode(blob_a_mask(c), f.subset ? 0 : -4));
+    return masks;
+  });
+  vcar::Prompt prompt;
+  prompt.reference_view = 4;
+  auto run = [&](const vcar::VcarParams& p) { return vcar::segment(w.scene, cams, prompt, renderer, seg, p); };
+  auto count_in = [](const std::vector<vcar::Index>& got, const std::vector<vcar::Index>& some) {
+    return std::count_if(some.begin(), some.end(),
+                         [&](vcar::Index i) { return std::binary_search(got.begin(), got.end(), i); });
+  };
+  const vcar::VcarParams robust = vcar::VcarParams::robust();
+  vcar::VcarParams off = robust;
+  off.grow_max = 0.f;
+  const vcar::SegmentationResult on_r = run(robust), off_r = run(off);
+  CHECK(off_r.diagnostics.masks_grown == 0);
+  CHECK(on_r.diagnostics.masks_grown == cams.size());  // every training mask, in the coarse round
+  // Without R12 blob A loses its rim; with it G_coarse and the result hold blob A whole, and
+  // blob B stays out.
+  CHECK(on_r.diagnostics.n_coarse > off_r.diagnostics.n_coarse);
+  CHECK(count_in(off_r.indices, w.a) < static_cast<std::ptrdiff_t>(w.a.size()));
+  CHECK(count_in(on_r.indices, w.a) == static_cast<std::ptrdiff_t>(w.a.size()));
+  CHECK(count_in(on_r.indices, w.b) == 0);
+  // The paper's presets never grow a mask.
+  CHECK(run(vcar::VcarParams::nvos()).diagnostics.masks_grown == 0);
 }
 
 TEST_CASE("pipeline: bad input and edge cases") {

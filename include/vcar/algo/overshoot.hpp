@@ -97,10 +97,9 @@ inline std::vector<std::uint8_t> occlusion_edges(const ImageF& alpha, const Imag
 }
 
 // Eq. R11b: the overshoot o_j of mask m (px; > 0: its contour lies outside the render's
-// occlusion edges). 0 when the mask has no contour or the render no occlusion edge.
-inline double overshoot_px(const Mask& m, const ImageF& alpha, const ImageF& depth, float delta) {
+// occlusion edges `edge`, Eq. R11a). 0 when the mask has no contour or the render no occlusion edge.
+inline double overshoot_px(const Mask& m, const std::vector<std::uint8_t>& edge) {
   const int W = m.width, H = m.height;
-  const std::vector<std::uint8_t> edge = occlusion_edges(alpha, depth, delta);
   std::vector<std::uint8_t> in(edge.size()), out(edge.size());
   for (std::size_t q = 0; q < edge.size(); ++q) {
     in[q] = edge[q] && m.data[q];
@@ -111,6 +110,10 @@ inline double overshoot_px(const Mask& m, const ImageF& alpha, const ImageF& dep
     if (!(std::isfinite(d_in[q]) || std::isfinite(d_out[q]))) return std::numeric_limits<double>::quiet_NaN();
     return d_in[q] <= d_out[q] ? std::sqrt(d_in[q]) : -std::sqrt(d_out[q]);
   });
+}
+// The same from the render (alpha, expected depth) and the depth step delta.
+inline double overshoot_px(const Mask& m, const ImageF& alpha, const ImageF& depth, float delta) {
+  return overshoot_px(m, occlusion_edges(alpha, depth, delta));
 }
 
 // Eq. R11c: erodes m (in place) by e px: a foreground pixel stays only when its distance to the

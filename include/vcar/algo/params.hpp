@@ -131,6 +131,12 @@ struct VcarParams {
   // mask; overshoot_min 0 = off.
   float overshoot_min = 0.f;
   float overshoot_margin = 1.5f;
+  // Eq. R12: a coarse-round mask that R11 does not erode (o_j < overshoot_min) grows by the
+  // covered, depth-continuous pixels between its contour and the render's occlusion edges, by
+  // at most min(-o_j + grow_margin px, grow_max |image diagonal|, the mask's radius
+  // sqrt(|M| / pi)); grow_max 0 = off.
+  float grow_max = 0.f;
+  float grow_margin = 1.f;
 
   // Paper defaults for NVOS (Sec. 4.2).
   static VcarParams nvos() { return VcarParams{}; }
@@ -164,9 +170,10 @@ struct VcarParams {
   // (R4), views weighted by foreshortening (R5), the fine round's band as wide as the masks'
   // measured undershoot (R6) where the vote without it splits (R6c), the strict threshold 0.85
   // when the fine vote is decisive (R7), ABR on masks widened by their undershoot when it is
-  // split, on their own footprints (R8), stages 2-3 again from the coarse vote at 0.3 when it
-  // is split (R9), hidden candidates on a seen background plane dropped (R10), and masks that
-  // reach 1 px or more past the render's occlusion edges eroded (R11). The edge band
+  // split, on their own footprints (R8), hidden candidates on a seen background plane dropped
+  // (R10), masks that reach 1 px or more past the render's occlusion edges eroded (R11) and
+  // masks that stop short of them grown to them (R12). R9 (a second pass from the coarse vote
+  // at a lower threshold after a split fine vote) is off since R12. The edge band
   // (R1) is off: R6-R7 do its work (docs/results.md, ablation). What vcar::segment uses when
   // given no parameters.
   static VcarParams robust() {
@@ -181,9 +188,9 @@ struct VcarParams {
     p.tau_strict = 0.85f;
     p.split_fraction = 0.1f;
     p.abr_undershoot = true;
-    p.tau_coarse_split = 0.3f;
     p.coplanar_radius = 0.75f;
     p.overshoot_min = 1.f;
+    p.grow_max = 0.1f;
     return p;
   }
   // A preset by name: robust, nvos, lerf, reference_code; vcar::Error otherwise.
@@ -237,6 +244,7 @@ struct VcarParams {
     f("coplanar_radius", p.coplanar_radius); f("coplanar_angle_deg", p.coplanar_angle_deg);
     f("coplanar_slab", p.coplanar_slab); f("overshoot_min", p.overshoot_min);
     f("overshoot_margin", p.overshoot_margin);
+    f("grow_max", p.grow_max); f("grow_margin", p.grow_margin);
   }
 
   // Throws vcar::Error naming the first parameter outside its range.
@@ -289,6 +297,9 @@ struct VcarParams {
       bad("overshoot_min", "must be in [0, 100] px (0 = off), got " + std::to_string(overshoot_min));
     if (!(overshoot_margin >= 0.f && overshoot_margin <= 100.f))
       bad("overshoot_margin", "must be in [0, 100] px, got " + std::to_string(overshoot_margin));
+    unit("grow_max", grow_max);
+    if (!(grow_margin >= 0.f && grow_margin <= 100.f))
+      bad("grow_margin", "must be in [0, 100] px, got " + std::to_string(grow_margin));
     if (!(edge_band >= 0.f && edge_band <= 1.f)) bad("edge_band", "must be in [0, 1] (0 = off), got " + std::to_string(edge_band));
   }
 

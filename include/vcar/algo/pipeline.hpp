@@ -23,6 +23,7 @@
 #include "vcar/algo/boundary_refinement.hpp"
 #include "vcar/algo/coplanar_background.hpp"
 #include "vcar/algo/decisive_threshold.hpp"
+#include "vcar/algo/occlusion_growth.hpp"
 #include "vcar/algo/overshoot.hpp"
 #include "vcar/algo/params.hpp"
 #include "vcar/algo/robust_sphere.hpp"
@@ -73,6 +74,7 @@ struct Diagnostics {
   std::size_t abr_masks_widened = 0; // training masks ABR read widened by their undershoot (Eq. R8)
   std::size_t coplanar_dropped = 0;  // hidden candidates on a seen background plane, dropped (Eq. R10)
   std::size_t overshoot_eroded = 0;  // masks voted eroded by their measured overshoot (Eq. R11), every round
+  std::size_t masks_grown = 0;       // coarse-round masks voted grown to the render's occlusion edges (Eq. R12)
   std::size_t masks_missing = 0;    // frames the segmenter answered with "no mask"
   std::size_t mask_store_bytes = 0; // run-length bytes held for ABR
   std::string note;                 // why the pipeline stopped early, if it did
@@ -190,7 +192,7 @@ class RoundVote {
 public:
   RoundVote(const GaussianScene& scene, const std::vector<Index>* candidates, const VcarParams& p, bool fine)
       : occlusion_(p.occlusion_aware || (fine ? p.fine_occlusion : p.coarse_occlusion)),
-        overshoot_(p.overshoot_min > 0.f), undershoot_(fine && p.undershoot_band > 0.f),
+        overshoot_(p.overshoot_min > 0.f), grow_(!fine && p.grow_max > 0.f), undershoot_(fine && p.undershoot_band > 0.f),
         gated_(undershoot_ && p.undershoot_gate),
         undecided_kept_(!fine && p.keep_undecided), keep_unseen_(fine && p.keep_unseen) {
     if (p.robust_vote()) {
@@ -208,15 +210,19 @@ public:
   std::span<const std::uint16_t> unoccluded_views() const {
     return robust_ ? robust_->unoccluded_views() : std::span<const std::uint16_t>{};
   }
-  // The view's render is needed: depth and alpha for Eq. R3 and R11, alpha for Eq. R6.
-  bool wants_depth() const { return occlusion_ || overshoot_ || undershoot_; }
+  // The view's render is needed: depth and alpha for Eq. R3, R11 and R12, alpha for Eq. R6.
+  bool wants_depth() const { return occlusion_ || overshoot_ || grow_ || undershoot_; }
   bool occlusion() const { return occlusion_; }
   bool overshoot() const { return overshoot_; }
+  bool grow() const { return grow_; }
   // Masks of this round eroded by Eq. R11 (vote() counts them).
   std::size_t overshoot_eroded() const { return overshoot_eroded_; }
   // Switches Eq. R11 off for this round (before its first view).
   void no_overshoot() { overshoot_ = false; }
   void count_overshoot_eroded() { ++overshoot_eroded_; }
+  // Masks of this round grown by Eq. R12 (vote() counts them; the coarse round only).
+  std::size_t grown() const { return grown_; }
+  void count_grown() { ++grown_; }
   // Eq. R6a of the latest view (0 when R6 is off or the view had no mask or render).
   double last_undershoot_px() const { return robust_ && undershoot_ ? robust_->last_undershoot_px() : 0.0; }
 
@@ -263,19 +269,20 @@ private:
     return tau_strict;
   }
 
-  bool occlusion_, overshoot_, undershoot_, gated_, undecided_kept_, keep_unseen_;
-  std::size_t overshoot_eroded_ = 0;
+  bool occlusion_, overshoot_, grow_, undershoot_, gated_, undecided_kept_, keep_unseen_;
+  std::size_t overshoot_eroded_ = 0, grown_ = 0;
   mutable bool undershoot_applied_ = false;
   std::optional<VisibilityVoting> paper_;
   std::optional<RobustVoting> robust_;
 };
 
-// One vote of one view. With the occlusion test (or Eq. R11) the view's expected depth comes
+// One vote of one view. With the occlusion test (or Eq. R11, R12) the view's expected depth comes
 // from `render` when the round kept it, else it is rendered from the same Gaussians the
 // segmenter saw. With Eq. R11 a mask that overshoots the render's occlusion edges is voted
 // eroded (a copy in `scratch`; an erosion that would take more than three quarters of the
 // mask's foreground is not applied: structures thinner than the erosion, or a mask of scattered
-// specks, are not what a dilated object looks like).
+// specks, are not what a dilated object looks like); with Eq. R12 (coarse round) one that stops
+// short of them is voted grown to them.
 // Returns the mask voted (m, &scratch or null): the one the caller keeps for ABR.
 template <Renderer R>
 const Mask* vote(RoundVote& voting, const Camera& cam, const Mask* m, const RenderOutput* render,
@@ -297,17 +304,25 @@ const Mask* vote(RoundVote& voting, const Camera& cam, const Mask* m, const Rend
   }
   if (render->depth.empty() && voting.occlusion())
     throw Error("the occlusion test needs a renderer that returns depth", "view '" + cam.name + "'");
-  if (voting.overshoot() && !render->depth.empty()) {
-    const double o = overshoot_px(*m, render->alpha, render->depth, params.depth_tolerance);  // Eq. R11b
-    if (o >= static_cast<double>(params.overshoot_min)) {
+  if ((voting.overshoot() || voting.grow()) && !render->depth.empty()) {
+    auto foreground = [](const Mask& x) {
+      return static_cast<std::size_t>(std::count_if(x.data.begin(), x.data.end(), [](std::uint8_t v) { return v != 0; }));
+    };
+    const std::vector<std::uint8_t> edges = occlusion_edges(render->alpha, render->depth, params.depth_tolerance);  // Eq. R11a
+    const double o = overshoot_px(*m, edges);  // Eq. R11b
+    if (voting.overshoot() && o >= static_cast<double>(params.overshoot_min)) {
       scratch = *m;
       erode_by_overshoot(scratch, o + static_cast<double>(params.overshoot_margin));  // Eq. R11c
-      auto foreground = [](const Mask& x) {
-        return std::count_if(x.data.begin(), x.data.end(), [](std::uint8_t v) { return v != 0; });
-      };
       if (4 * foreground(scratch) >= foreground(*m)) {  // thin or scattered masks are kept as they are
         m = &scratch;
         voting.count_overshoot_eroded();
+      }
+    } else if (voting.grow() && o < static_cast<double>(params.overshoot_min)) {
+      const int reach = growth_reach(o, foreground(*m), m->width, m->height, params.grow_max, params.grow_margin);  // Eq. R12c
+      scratch = *m;
+      if (grow_to_occlusion_edges(scratch, edges, render->alpha, render->depth, params.depth_tolerance, reach) > 0) {
+        m = &scratch;  // Eq. R12b
+        voting.count_grown();
       }
     }
   }
@@ -550,6 +565,7 @@ bool refine_from_coarse(const GaussianScene& scene, const std::vector<Camera>& t
   d2.n_scene = first.n_scene;
   d2.masks_missing = first.masks_missing;
   d2.overshoot_eroded = first.overshoot_eroded;
+  d2.masks_grown = first.masks_grown;
   d2.tau_coarse_applied = params.tau_coarse_split;
   train_masks = std::move(coarse_masks);
   complete = refine(scene, train_cameras, prompt, renderer, segmenter, params, progress, t_start, train_masks,
@@ -623,6 +639,7 @@ SegmentationResult segment(const GaussianScene& scene, const std::vector<Camera>
   timing("coarse_segment", t1.total - t1.render - t1.voting);
   timing("coarse_voting", t1.voting);
   diag.overshoot_eroded = coarse.overshoot_eroded();
+  diag.masks_grown = coarse.grown();
   const bool complete = detail::refine_from_coarse(
       scene, train_cameras, prompt, renderer, segmenter, params, progress, t_start, train_masks,
       [&](float tau, std::vector<Index>& selected, std::vector<float>& scores) { coarse.selected(tau, selected, scores); },
