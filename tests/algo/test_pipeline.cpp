@@ -85,6 +85,23 @@ vcar::Mask blob_a_mask(const vcar::Camera& c) {
   return m;
 }
 
+// Renders blob A's disc at depth 4 over a wall at depth 4.5 (the whole scene), or over nothing
+// (a subset: the fine round's renders of G_coarse): the occlusion edges of Eq. R11-R12.
+auto disc_over_wall_renderer() {
+  return vcar::make_renderer([](const vcar::RenderRequest& q) {
+    vcar::RenderOutput out;
+    const vcar::Mask disc = blob_a_mask(*q.camera);
+    out.rgb = vcar::ImageF(q.camera->width, q.camera->height, 3, 0.f);
+    out.alpha = vcar::ImageF(q.camera->width, q.camera->height, 1, 0.f);
+    out.depth = vcar::ImageF(q.camera->width, q.camera->height, 1, 0.f);
+    for (std::size_t k = 0; k < disc.data.size(); ++k) {
+      out.alpha.data[k] = disc.data[k] || !q.subset ? 1.f : 0.f;
+      out.depth.data[k] = disc.data[k] ? 4.f : (q.subset ? 0.f : 4.5f);
+    }
+    return out;
+  });
+}
+
 auto disc_segmenter(int* rounds = nullptr) {
   return vcar::make_segmenter([rounds](const vcar::FrameSequence& f, const vcar::Prompt&) {
     if (rounds) ++*rounds;
@@ -403,20 +420,7 @@ TEST_CASE("Eq. R11: masks that overshoot the render's occlusion edges are eroded
     }
   }
   const auto cams = forward_rig();
-  // Renders: blob A's disc at depth 4 over the wall at depth 4.5 (the whole scene), or over
-  // nothing (a subset: the fine round's renders of G_coarse).
-  auto renderer = vcar::make_renderer([&](const vcar::RenderRequest& q) {
-    vcar::RenderOutput out;
-    const vcar::Mask disc = blob_a_mask(*q.camera);
-    out.rgb = vcar::ImageF(q.camera->width, q.camera->height, 3, 0.f);
-    out.alpha = vcar::ImageF(q.camera->width, q.camera->height, 1, 0.f);
-    out.depth = vcar::ImageF(q.camera->width, q.camera->height, 1, 0.f);
-    for (std::size_t k = 0; k < disc.data.size(); ++k) {
-      out.alpha.data[k] = disc.data[k] || !q.subset ? 1.f : 0.f;
-      out.depth.data[k] = disc.data[k] ? 4.f : (q.subset ? 0.f : 4.5f);
-    }
-    return out;
-  });
+  auto renderer = disc_over_wall_renderer();
   int dilate_px = 5;  // the segmenter's disc (11.4 px at depth 4), dilated: the ring (12-14 px) inside
   bool fine_only = false;  // dilate only the fine round's masks (renders of a subset)
   auto seg = vcar::make_segmenter([&](const vcar::FrameSequence& f, const vcar::Prompt&) {
@@ -471,18 +475,7 @@ TEST_CASE("Eq. R12: coarse-round masks that stop short of the render's occlusion
   // the disc's edge is depth-continuous and the mask grows back to the disc.
   auto w = two_blobs();
   const auto cams = forward_rig();
-  auto renderer = vcar::make_renderer([&](const vcar::RenderRequest& q) {
-    vcar::RenderOutput out;
-    const vcar::Mask disc = blob_a_mask(*q.camera);
-    out.rgb = vcar::ImageF(q.camera->width, q.camera->height, 3, 0.f);
-    out.alpha = vcar::ImageF(q.camera->width, q.camera->height, 1, 0.f);
-    out.depth = vcar::ImageF(q.camera->width, q.camera->height, 1, 0.f);
-    for (std::size_t k = 0; k < disc.data.size(); ++k) {
-      out.alpha.data[k] = disc.data[k] || !q.subset ? 1.f : 0.f;
-      out.depth.data[k] = disc.data[k] ? 4.f : (q.subset ? 0.f : 4.5f);
-    }
-    return out;
-  });
+  auto renderer = disc_over_wall_renderer();
   auto seg = vcar::make_segmenter([&](const vcar::FrameSequence& f, const vcar::Prompt&) {
     std::vector<std::optional<vcar::Mask>> masks;
     for (const auto& c : f.cameras) masks.emplace_back(vcar::synth::dilate_erode(blob_a_mask(c), f.subset ? 0 : -4));
