@@ -118,15 +118,33 @@ std::vector<std::size_t> coplanar_background(const GaussianScene& scene, std::sp
     std::vector<detail::PlanePoint> points;
     float t_max = 0.f, s_max = 0.f;  // largest thickness, largest scale of its points
   };
-  std::vector<detail::PlanePoint> members[2];  // [0] background, [1] selected, ascending index
+  // [0] background, [2] selected; ascending index.
+  std::vector<detail::PlanePoint> members[4];
   for (std::size_t i = 0; i < scene.size(); ++i) {
     if ((scene.mu(i) - rc.c).squaredNorm() > reach * reach || !seen(static_cast<Index>(i))) continue;
     detail::PlanePoint q = detail::plane_point(scene, static_cast<Index>(i), p.min_flatness);
-    if (q.flat) members[is_selected(static_cast<Index>(i))].push_back(std::move(q));
+    if (q.flat) members[is_selected(static_cast<Index>(i)) ? 2 : 0].push_back(std::move(q));
   }
+  // A candidate's slab is as thick as the thickest background point (B) and the largest
+  // selected extent (E_i): a few outliers would widen every candidate's slab over the whole
+  // neighbourhood. So the thickest (largest) tenth of each set goes into a grid of its own,
+  // [1] and [3], searched with its own slab: the same points and tests, fewer cells visited.
+  auto extent = [](const detail::PlanePoint& q) { return std::max({q.A.col(0).norm(), q.A.col(1).norm(), q.A.col(2).norm()}); };
+  auto split_largest_tenth = [](std::vector<detail::PlanePoint>& all, std::vector<detail::PlanePoint>& large, auto key) {
+    if (all.size() < 10) return;
+    std::vector<float> v(all.size());
+    for (std::size_t j = 0; j < v.size(); ++j) v[j] = key(all[j]);
+    const auto cut = v.begin() + static_cast<std::ptrdiff_t>(v.size() * 9 / 10);
+    std::nth_element(v.begin(), cut, v.end());
+    std::vector<detail::PlanePoint> rest;
+    for (detail::PlanePoint& q : all) (key(q) < *cut ? rest : large).push_back(std::move(q));
+    all = std::move(rest);
+  };
+  split_largest_tenth(members[0], members[1], [](const detail::PlanePoint& q) { return q.t; });
+  split_largest_tenth(members[2], members[3], extent);
   auto cell_of = [&](const Eigen::Vector3f& m) { return flat_index(cell_index(m, 0), cell_index(m, 1), cell_index(m, 2)); };
-  Grid grid[2];
-  for (int g = 0; g < 2; ++g) {
+  Grid grid[4];
+  for (int g = 0; g < 4; ++g) {
     grid[g].start.assign(static_cast<std::size_t>(dim) * dim * dim + 1, 0);
     for (const detail::PlanePoint& q : members[g]) ++grid[g].start[cell_of(q.mu) + 1];
     for (std::size_t c = 1; c < grid[g].start.size(); ++c) grid[g].start[c] += grid[g].start[c - 1];
@@ -135,7 +153,7 @@ std::vector<std::size_t> coplanar_background(const GaussianScene& scene, std::sp
     for (const detail::PlanePoint& q : members[g]) {
       grid[g].points[next[cell_of(q.mu)]++] = q;
       grid[g].t_max = std::max(grid[g].t_max, q.t);
-      for (int d = 0; d < 3; ++d) grid[g].s_max = std::max(grid[g].s_max, q.A.col(d).norm());
+      grid[g].s_max = std::max(grid[g].s_max, extent(q));
     }
   }
   // f(point) for every point of grid g in the cells within r of a that meet the slab
@@ -165,13 +183,16 @@ std::vector<std::size_t> coplanar_background(const GaussianScene& scene, std::sp
     long B = 0, S = 0;
     // Coplanar points lie within slab (t_a + t_max) of a's plane, edge-on ones that reach it
     // within edge_sigma times their largest scale.
-    for_each_near(grid[0], a, p.slab * (a.t + grid[0].t_max),
-                  [&](const detail::PlanePoint& q) { B += detail::coplanar(a, q, r, cos_alpha, p.slab); });
+    for (int g = 0; g <= 1; ++g)
+      for_each_near(grid[g], a, p.slab * (a.t + grid[g].t_max),
+                    [&](const detail::PlanePoint& q) { B += detail::coplanar(a, q, r, cos_alpha, p.slab); });
     if (B == 0) return;  // no seen background plane: kept, whatever S
-    const float w1 = std::max(p.slab * (a.t + grid[1].t_max), p.edge_sigma * grid[1].s_max);
-    for_each_near(grid[1], a, w1, [&](const detail::PlanePoint& q) {
-      S += detail::coplanar(a, q, r, cos_alpha, p.slab) || detail::reaches_edge_on(a, q, r, p.edge_cos, p.edge_sigma);
-    });
+    for (int g = 2; g <= 3; ++g) {
+      const float w = std::max(p.slab * (a.t + grid[g].t_max), p.edge_sigma * grid[g].s_max);
+      for_each_near(grid[g], a, w, [&](const detail::PlanePoint& q) {
+        S += detail::coplanar(a, q, r, cos_alpha, p.slab) || detail::reaches_edge_on(a, q, r, p.edge_cos, p.edge_sigma);
+      });
+    }
     drop[k] = B > S;                                                                      // Eq. R10
   });
   for (std::size_t k = 0; k < selected.size(); ++k)
