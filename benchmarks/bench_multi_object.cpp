@@ -42,7 +42,9 @@ struct Source {
   const vcar::synth::OracleSegmenter* oracle;
   bool pixels;
   std::size_t* masks;
+  std::size_t* calls;  // segmenter calls (an external segmenter: one program start each)
   void segment(const vcar::FrameSequence& f, const vcar::Prompt&, const vcar::MaskSink& sink) {
+    ++*calls;
     for (std::size_t k = 0; k < f.size(); ++k) {
       if (pixels) (void)f.image(k);
       ++*masks;
@@ -92,27 +94,30 @@ int main(int argc, char** argv) {
               world.scene.size(), rig.train.size(), rig.kind.c_str(), vcar::max_threads(), repeats);
   for (bool pixels : {false, true}) {
     std::vector<double> single_t, multi_t;
-    std::size_t single_renders = 0, multi_renders = 0, single_masks = 0, multi_masks = 0;
+    std::size_t single_renders = 0, multi_renders = 0, single_masks = 0, multi_masks = 0, single_calls = 0, multi_calls = 0;
     std::vector<vcar::SegmentationResult> singles(2);
     vcar::cli::MultiSegmentation multi;
     for (int r = 0; r < repeats; ++r) {
       auto t = Clock::now();
       renderer.renders = 0;
-      single_masks = 0;
+      single_masks = single_calls = 0;
       for (int o = 0; o < 2; ++o) {
-        Source s{&oracles[o], pixels, &single_masks};
+        Source s{&oracles[o], pixels, &single_masks, &single_calls};
         singles[o] = vcar::segment(world.scene, rig.train, objects[o].prompt, renderer, s, params);
       }
       single_t.push_back(since(t));
       single_renders = renderer.renders;
       renderer.renders = 0;
-      multi_masks = 0;
+      multi_masks = multi_calls = 0;
       vcar::cli::MultiSegmentFn fn = [&](const vcar::FrameSequence& f, const std::vector<vcar::cli::ObjectRequest>& req,
                                         const vcar::cli::ObjectMaskSink& sink) {
+        ++multi_calls;
         for (std::size_t k = 0; k < f.size(); ++k) {
           if (pixels) (void)f.image(k);  // one image per frame, whatever the number of objects
           for (std::size_t q = 0; q < req.size(); ++q) {
-            const std::optional<vcar::Mask> m = oracles[req[q].object].mask(f.cameras[k], k, f.subset);
+            if (!req[q].covers(k)) continue;  // the batched fine round: each object its own frames
+            const std::optional<vcar::Mask> m =
+                oracles[req[q].object].mask(f.cameras[k], k - req[q].first_frame, f.subset);
             ++multi_masks;
             sink(k, q, m ? &*m : nullptr);
           }
@@ -142,9 +147,10 @@ int main(int argc, char** argv) {
                 pixels ? "pixels" : "oracle", ts, tm, tm / ts, ts0, tm0, tm0 / ts0, multi.timings_s[0].second,
                 multi.timings_s[1].second, multi.timings_s[2].second, multi.conflicts,
                 same ? "match the single runs" : "DIFFER from the single runs");
-    std::printf("        renders: two single runs %zu, one run of two objects %zu (ratio %.2f); masks asked of the segmenter: %zu, %zu\n",
+    std::printf("        renders: two single runs %zu, one run of two objects %zu (ratio %.2f); masks asked of the segmenter: %zu, %zu; "
+                "segmenter calls (external: program starts): %zu, %zu\n",
                 single_renders, multi_renders, static_cast<double>(multi_renders) / static_cast<double>(single_renders),
-                single_masks, multi_masks);
+                single_masks, multi_masks, single_calls, multi_calls);
     auto stages = [](const vcar::Diagnostics& d) {
       std::string s;
       char buf[64];

@@ -10,7 +10,8 @@ synthetic scenes, whose target has its own colour; used by the protocol tests.
 
 Several objects (prompt.json "objects", `vcar segment --prompts`): each object's colour is
 picked on its own frame ("frame") at its first positive point, and its masks go to
-masks/<name>/NNNNN.png.
+masks/<name>/NNNNN.png for the frames of its range ("frames": [first, count]; a batched round
+gives each object its own frames).
 
 Misbehaviours for tests: --fail exits with STATUS before writing anything, --sleep waits S
 seconds first, --bad-size writes frame 0's mask one pixel too wide, --garbage writes a mask file
@@ -118,7 +119,7 @@ def main(argv):
         cams = json.load(f)
     objects = prompt.get("objects")
     if objects is None:  # one object: its prompt is on frame 0, masks in masks/
-        objects = [dict(prompt, name="", frame=0)]
+        objects = [dict(prompt, name="", frame=0, frames=[0, len(cams)])]
     frames = [read_png(os.path.join(req, "frames", cam["img_name"] + ".png")) for cam in cams]
     for obj in objects:
         pts = [p for p, l in zip(obj["points"], obj["point_labels"]) if l == 1]
@@ -130,7 +131,9 @@ def main(argv):
         target = rows[v][u * c:u * c + 3]
         out_dir = os.path.join(req, "masks", obj["name"]) if obj["name"] else os.path.join(req, "masks")
         os.makedirs(out_dir, exist_ok=True)
-        for k, cam in enumerate(cams):
+        first, count = obj.get("frames", [0, len(cams)])  # the frames this object is asked about
+        for k in range(first, first + count):
+            cam = cams[k]
             stem = cam["img_name"]
             w, h, c, rows = frames[k]
             out = os.path.join(out_dir, stem + ".png")

@@ -141,21 +141,22 @@ int run_segment_objects(const SegmentOptions& o, const GlobalOptions& g) {
   if (!o.masks.empty()) {
     for (const ObjectPrompt& ob : objects) folders.emplace_back(fs::path(o.masks) / ob.name);
     source = [&](const FrameSequence& f, const std::vector<ObjectRequest>& req, const ObjectMaskSink& sink) {
-      if (req.size() == 1) {
+      if (req.size() == 1 && req[0].first_frame == 0 && req[0].frames == f.size()) {
         folders[req[0].object].segment(f, req[0].prompt, [&](std::size_t k, const Mask* m) { sink(k, 0, m); });
         return;
       }
       for (std::size_t k = 0; k < f.size(); ++k) {
         const FrameSequence one = one_frame(f, k);
         for (std::size_t q = 0; q < req.size(); ++q)
-          folders[req[q].object].segment(one, req[q].prompt, [&](std::size_t, const Mask* m) { sink(k, q, m); });
+          if (req[q].covers(k))
+            folders[req[q].object].segment(one, req[q].prompt, [&](std::size_t, const Mask* m) { sink(k, q, m); });
       }
     };
   } else if (external) {
     source = [&](const FrameSequence& f, const std::vector<ObjectRequest>& req, const ObjectMaskSink& sink) {
-      std::vector<std::pair<std::string, Prompt>> pairs;
-      for (const ObjectRequest& r : req) pairs.emplace_back(r.name, r.prompt);
-      external->segment_objects(f, pairs, sink);
+      std::vector<io::ExternalSegmenter::Object> asked;
+      for (const ObjectRequest& r : req) asked.push_back({r.name, r.prompt, r.first_frame, r.frames});
+      external->segment_objects(f, std::move(asked), sink);
     };
   } else {
     for (const ObjectPrompt& ob : objects) {
@@ -163,10 +164,13 @@ int run_segment_objects(const SegmentOptions& o, const GlobalOptions& g) {
       op.target_id = ob.object_id;
       oracles.emplace_back(oracle_ds->world, op, cpu_renderer);
     }
+    // Each object's frames numbered from its own first (the oracle's failure draws depend on the
+    // frame number): the same answers as in a single run.
     source = [&](const FrameSequence& f, const std::vector<ObjectRequest>& req, const ObjectMaskSink& sink) {
       for (std::size_t k = 0; k < f.size(); ++k)
         for (std::size_t q = 0; q < req.size(); ++q) {
-          const std::optional<Mask> m = oracles[req[q].object].mask(f.cameras[k], k, f.subset);
+          if (!req[q].covers(k)) continue;
+          const std::optional<Mask> m = oracles[req[q].object].mask(f.cameras[k], k - req[q].first_frame, f.subset);
           sink(k, q, m ? &*m : nullptr);
         }
     };
@@ -278,14 +282,15 @@ int run_segment_objects(const SegmentOptions& o, const GlobalOptions& g) {
                            {"masks", o.masks}, {"segmenter_cmd", o.segmenter_cmd}, {"oracle", o.oracle}};
   write_json(out.path() / "report.json",
              {{"inputs", inputs}, {"parameters", params_json(params)}, {"objects", rep_objects},
-              {"conflicts", result.conflicts}, {"counts", {{"scene", scene.size()}, {"selected", union_idx.size()}, {"removed", rest.size()}}},
+              {"conflicts", result.conflicts}, {"segmenter_calls", result.segmenter_calls}, {"counts", {{"scene", scene.size()}, {"selected", union_idx.size()}, {"removed", rest.size()}}},
               {"timings_s", shared}, {"seconds", seconds}, {"threads", max_threads()}, {"peak_rss_mib", peak_rss_mib()},
               {"outputs", {{"objects", "objects/<name>.ply"}, {"object", "object.ply"}, {"removed", "removed.ply"},
                            {"labels", "labels.ply"}, {"selection", "selection.json"}}}});
   progress.done();
   out.commit();
 
-  std::printf("%zu objects in one run (one coarse round for all)\n", K);
+  std::printf("%zu objects in one run (one coarse round for all; the segmenter asked %zu time%s)\n", K,
+              result.segmenter_calls, result.segmenter_calls == 1 ? "" : "s");
   for (std::size_t k = 0; k < K; ++k) {
     const Diagnostics& d = result.objects[k].diagnostics;
     std::printf("%-12s %6zu selected (coarse %zu -> fine %zu); gap %.1f deg, SSS %s; ABR %zu compressed; %zu masks missing%s%s\n",

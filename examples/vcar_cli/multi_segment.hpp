@@ -4,12 +4,18 @@
 // segmenter is asked once per frame for every object's mask, and each object's vote (Eq. 1-3, or
 // the robust vote) takes its mask. Then each object goes on alone, exactly as vcar::segment
 // (algo/pipeline.hpp) does after its coarse vote: its own sphere (Eq. 4-5), view completeness
-// (Eq. 6), SSS and fine round (Eq. 7-8) and ABR (Eq. 9-14). A Gaussian that two objects select
-// goes to the one with the higher score (R_i of its last vote; ties to the earlier object).
+// (Eq. 6), SSS and fine round (Eq. 7-8) and ABR (Eq. 9-14). The fine rounds of all objects go to
+// the segmenter in one batched call: each object's frames (renders of its own G_coarse) one
+// after the other, each object asked about its own frames only (ObjectRequest::first_frame,
+// frames), so an external segmenter starts once for them all (two calls per run, not one per
+// object and round). With Eq. R9 on (tau_coarse_split > 0, not a preset's default) an object
+// may need a second fine round; the fine rounds then go one object at a time.
+// A Gaussian that two objects select goes to the one with the higher score (R_i of its last
+// vote; ties to the earlier object).
 //
 // The vote is one accumulator per object, not MultiObjectVoting: the default robust vote and the
 // occlusion test have no multi-object form; what the objects share is the rendering and the
-// segmenter's round. tests.cmake checks that each object's result equals a single run's.
+// segmenter's calls. tests.cmake checks that each object's result equals a single run's.
 #include <cstddef>
 #include <functional>
 #include <memory>
@@ -28,13 +34,18 @@ struct ObjectPrompt {
   int object_id = -1;     // the synthetic world's object (for the oracle and eval), -1 unknown
 };
 
-// One object asked of the segmenter in a round; prompt.reference_view is a frame of the round.
+// One object asked of the segmenter in a round, about frames [first_frame, first_frame + frames)
+// of it (the coarse round: every frame; the batched fine round: the object's own);
+// prompt.reference_view is a frame of the round inside that range.
 struct ObjectRequest {
   std::size_t object = 0;  // index into the run's objects
   std::string name;
   Prompt prompt;
+  std::size_t first_frame = 0, frames = 0;
+  bool covers(std::size_t k) const { return k >= first_frame && k - first_frame < frames; }
 };
-// sink(frame, k, mask): the mask of requests[k] in that frame (null: no mask).
+// sink(frame, k, mask): the mask of requests[k] in that frame (null: no mask), for frames the
+// request covers.
 using ObjectMaskSink = std::function<void(std::size_t frame, std::size_t k, const Mask* mask)>;
 using MultiSegmentFn = std::function<void(const FrameSequence&, const std::vector<ObjectRequest>&, const ObjectMaskSink&)>;
 
@@ -42,6 +53,7 @@ struct MultiSegmentation {
   std::vector<SegmentationResult> objects;   // aligned with the prompts; conflicts resolved
   std::size_t conflicts = 0;                 // Gaussians selected by more than one object
   std::vector<std::size_t> lost;             // per object: Gaussians it lost to another
+  std::size_t segmenter_calls = 0;           // 2 with fine rounds (coarse, batched fine), 1 without
   std::vector<std::pair<std::string, double>> timings_s;  // the shared coarse round
 };
 
@@ -55,9 +67,130 @@ struct OneObject {
     ObjectRequest r = request;
     r.prompt = prompt;
     r.prompt.reference_view = 0;  // run_round's frame 0 is the reference view
+    r.first_frame = 0;
+    r.frames = frames.size();
     (*fn)(frames, {r}, [&](std::size_t k, std::size_t, const Mask* m) { sink(k, m); });
   }
 };
+
+// Stages 2 and 3 of every object (vcar::detail::ObjectRefinement), their fine rounds in one
+// segmenter call: the frames of object a, then of object b, ..., each frame rendered from its
+// object's G_coarse; each object's request covers its own frames, its prompt on the first of
+// them (the reference view). Timings per object: its renders and votes; the segmenter's own
+// time of the call shared in proportion to the object's frames. "total": the object's share.
+template <Renderer R, class CoarseSeen>
+void refine_objects(const GaussianScene& scene, const std::vector<Camera>& train_cameras,
+                    const std::vector<ObjectPrompt>& objects, R& renderer, const MultiSegmentFn& segmenter,
+                    const VcarParams& params, const ProgressCallback& progress, vcar::detail::Clock::time_point t_start,
+                    std::vector<std::unique_ptr<vcar::detail::RoundVote>>& votes, CoarseSeen&& coarse_seen,
+                    std::vector<std::vector<std::optional<RleMask>>>& train_masks,
+                    std::vector<SegmentationResult>& results) {
+  using vcar::detail::Clock;
+  using vcar::detail::seconds_since;
+  const std::size_t K = objects.size();
+  std::vector<std::unique_ptr<vcar::detail::ObjectRefinement>> refine(K);
+  std::vector<bool> alive(K);
+  std::vector<double> own_s(K, 0.0);  // each object's time outside the shared call's segmenter
+  for (std::size_t o = 0; o < K; ++o) {
+    const auto to = Clock::now();
+    Diagnostics& d = results[o].diagnostics;
+    d.overshoot_eroded = votes[o]->overshoot_eroded();
+    d.masks_grown = votes[o]->grown();
+    d.tau_coarse_applied = params.tau_coarse;
+    std::vector<Index> selected;
+    std::vector<float> scores;
+    votes[o]->selected(params.tau_coarse, selected, scores);
+    refine[o] = std::make_unique<vcar::detail::ObjectRefinement>(scene, train_cameras, objects[o].prompt, params,
+                                                                 train_masks[o], std::move(selected), std::move(scores),
+                                                                 results[o]);
+    alive[o] = refine[o]->start(renderer, progress, t_start);
+    own_s[o] += seconds_since(to);
+  }
+
+  // ---- the batched fine round
+  std::vector<Camera> frames;
+  std::vector<std::size_t> owner;  // frame -> object
+  std::vector<ObjectRequest> requests;
+  for (std::size_t o = 0; o < K; ++o) {
+    if (!alive[o] || !refine[o]->has_round()) continue;
+    ObjectRequest r{o, objects[o].name, objects[o].prompt, frames.size(), refine[o]->frames().size()};
+    r.prompt.reference_view = frames.size();  // the object's first frame is its reference view
+    for (const Camera& c : refine[o]->frames()) {
+      frames.push_back(c);
+      owner.push_back(o);
+    }
+    requests.push_back(std::move(r));
+  }
+  if (!requests.empty()) {
+    std::vector<double> t_render(K, 0.0), t_vote(K, 0.0);
+    std::vector<bool> seen(frames.size(), false);
+    std::optional<std::pair<std::size_t, RenderOutput>> last;  // the latest render, when its object votes with depth
+    FrameSequence seq;
+    seq.cameras = frames;
+    seq.subset = true;
+    seq.image = [&](std::size_t k) -> ImageRGB8 {
+      if (k >= frames.size()) throw Error("frame " + std::to_string(k) + " out of range", "fine round (all objects)");
+      const std::size_t o = owner[k];
+      const auto tr = Clock::now();
+      RenderRequest q;
+      q.scene = &scene;
+      q.camera = &frames[k];
+      q.subset = &refine[o]->coarse_set();
+      q.background = params.background;
+      q.want_depth = refine[o]->wants_depth();
+      RenderOutput r = renderer.render(q);
+      ImageRGB8 img = to_8bit(r.rgb);
+      if (q.want_depth) last.emplace(k, std::move(r));
+      t_render[o] += seconds_since(tr);
+      return img;
+    };
+    ObjectMaskSink sink = [&](std::size_t k, std::size_t q, const Mask* m) {
+      if (q >= requests.size() || !requests[q].covers(k))
+        throw Error("segmenter answered frame " + std::to_string(k) + " for request " + std::to_string(q) +
+                        ", which does not cover it", "fine round (all objects)");
+      const std::size_t o = requests[q].object;
+      const Camera& cam = frames[k];
+      const std::string where = "fine round (" + objects[o].name + "), view '" + cam.name + "'";
+      if (seen[k]) throw Error("segmenter answered a frame twice", where);
+      seen[k] = true;
+      if (m && (m->width != cam.width || m->height != cam.height || m->channels != 1))
+        throw Error("mask is " + std::to_string(m->width) + "x" + std::to_string(m->height) + ", the view is " +
+                        std::to_string(cam.width) + "x" + std::to_string(cam.height), where);
+      if (!m) ++results[o].diagnostics.masks_missing;
+      const auto tv = Clock::now();
+      refine[o]->on_mask(k - requests[q].first_frame, m, last && last->first == k ? &last->second : nullptr, renderer);
+      t_vote[o] += seconds_since(tv);
+      if (progress && !progress({"fine round (all objects)", k + 1, frames.size(), seconds_since(t_start)}))
+        throw Cancelled("fine round (all objects)");
+    };
+    const auto t1 = Clock::now();
+    try {
+      segmenter(seq, requests, sink);
+    } catch (const Error&) {
+      throw;
+    } catch (const std::exception& e) {
+      throw Error(std::string("segmenter failed: ") + e.what(), "fine round (all objects)");
+    }
+    double segment_s = seconds_since(t1);
+    for (std::size_t o = 0; o < K; ++o) segment_s -= t_render[o] + t_vote[o];
+    for (const ObjectRequest& r : requests) {
+      const std::size_t o = r.object;
+      for (std::size_t k = r.first_frame; k < r.first_frame + r.frames; ++k)
+        if (!seen[k]) ++results[o].diagnostics.masks_missing;
+      const double share = segment_s * static_cast<double>(r.frames) / static_cast<double>(frames.size());
+      const auto te = Clock::now();
+      alive[o] = refine[o]->end_round(t_render[o], share, t_vote[o]);
+      own_s[o] += t_render[o] + t_vote[o] + share + seconds_since(te);
+    }
+  }
+  for (std::size_t o = 0; o < K; ++o) {
+    const auto tf = Clock::now();
+    if (alive[o]) refine[o]->finish(progress, t_start, coarse_seen(o));
+    refine[o].reset();
+    votes[o].reset();  // its counters are not needed any more
+    results[o].diagnostics.timings_s.emplace_back("total", own_s[o] + seconds_since(tf));
+  }
+}
 
 }  // namespace detail_multi
 
@@ -111,7 +244,7 @@ inline std::size_t resolve_conflicts(std::vector<SegmentationResult>& objects, s
 // Segments every object of `objects` (see the top of this file). Throws like vcar::segment.
 template <Renderer R>
 MultiSegmentation segment_objects(const GaussianScene& scene, const std::vector<Camera>& train_cameras,
-                                  const std::vector<ObjectPrompt>& objects, R& renderer, const MultiSegmentFn& segmenter,
+                                  const std::vector<ObjectPrompt>& objects, R& renderer, const MultiSegmentFn& source,
                                   const VcarParams& params = VcarParams::robust(), const ProgressCallback& progress = {}) {
   using vcar::detail::Clock;
   using vcar::detail::seconds_since;
@@ -127,6 +260,10 @@ MultiSegmentation segment_objects(const GaussianScene& scene, const std::vector<
   const auto t_start = Clock::now();
   const std::size_t M = train_cameras.size(), K = objects.size();
   MultiSegmentation out;
+  const MultiSegmentFn segmenter = [&](const FrameSequence& f, const std::vector<ObjectRequest>& r, const ObjectMaskSink& s) {
+    ++out.segmenter_calls;
+    source(f, r, s);
+  };
   out.objects.resize(K);
   for (auto& r : out.objects) r.diagnostics.n_scene = scene.size();
 
@@ -140,7 +277,7 @@ MultiSegmentation segment_objects(const GaussianScene& scene, const std::vector<
   }
   std::vector<ObjectRequest> requests;
   for (std::size_t o = 0; o < K; ++o) {
-    ObjectRequest r{o, objects[o].name, objects[o].prompt};
+    ObjectRequest r{o, objects[o].name, objects[o].prompt, 0, M};
     r.prompt.reference_view = frame_of[objects[o].prompt.reference_view];
     requests.push_back(std::move(r));
   }
@@ -212,20 +349,27 @@ MultiSegmentation segment_objects(const GaussianScene& scene, const std::vector<
   const double t_total = seconds_since(t1);
   out.timings_s = {{"coarse_render", t_render}, {"coarse_segment", t_total - t_render - t_vote}, {"coarse_voting", t_vote}};
 
-  // ---- each object alone: sphere, view completeness, SSS + fine round, ABR.
-  for (std::size_t o = 0; o < K; ++o) {
-    detail_multi::OneObject one{&segmenter, ObjectRequest{o, objects[o].name, objects[o].prompt}};
-    const auto to = Clock::now();
-    out.objects[o].diagnostics.overshoot_eroded = votes[o]->overshoot_eroded();
-    out.objects[o].diagnostics.masks_grown = votes[o]->grown();
-    // Stages 2 and 3 exactly as vcar::segment runs them after its coarse vote (Eq. R9 included).
-    vcar::detail::refine_from_coarse(
-        scene, train_cameras, objects[o].prompt, renderer, one, params, progress, t_start, train_masks[o],
-        [&](float tau, std::vector<Index>& selected, std::vector<float>& scores) { votes[o]->selected(tau, selected, scores); },
-        out.objects[o], "fine round (" + objects[o].name + ")",
-        votes[o]->occlusion() ? votes[o]->unoccluded_views() : std::span<const std::uint16_t>{});
-    votes[o].reset();  // its counters are not needed any more
-    out.objects[o].diagnostics.timings_s.emplace_back("total", seconds_since(to));
+  // ---- each object alone: sphere, view completeness, SSS cameras; one batched fine round;
+  // then each object's fine selection, Eq. R10 and ABR (exactly as vcar::segment runs them).
+  auto coarse_seen = [&](std::size_t o) {
+    return votes[o]->occlusion() ? votes[o]->unoccluded_views() : std::span<const std::uint16_t>{};
+  };
+  if (vcar::detail::may_retake_coarse(params)) {  // Eq. R9 on: one object at a time
+    for (std::size_t o = 0; o < K; ++o) {
+      detail_multi::OneObject one{&segmenter, ObjectRequest{o, objects[o].name, objects[o].prompt}};
+      const auto to = Clock::now();
+      out.objects[o].diagnostics.overshoot_eroded = votes[o]->overshoot_eroded();
+      out.objects[o].diagnostics.masks_grown = votes[o]->grown();
+      vcar::detail::refine_from_coarse(
+          scene, train_cameras, objects[o].prompt, renderer, one, params, progress, t_start, train_masks[o],
+          [&](float tau, std::vector<Index>& selected, std::vector<float>& scores) { votes[o]->selected(tau, selected, scores); },
+          out.objects[o], "fine round (" + objects[o].name + ")", coarse_seen(o));
+      votes[o].reset();  // its counters are not needed any more
+      out.objects[o].diagnostics.timings_s.emplace_back("total", seconds_since(to));
+    }
+  } else {
+    detail_multi::refine_objects(scene, train_cameras, objects, renderer, segmenter, params, progress, t_start,
+                                 votes, coarse_seen, train_masks, out.objects);
   }
   out.conflicts = resolve_conflicts(out.objects, scene.size(), out.lost);
   out.timings_s.emplace_back("total", seconds_since(t_start));

@@ -237,6 +237,23 @@ vcar_cli_test(NAME segment_objects_segmenter_cmd
   CHECKS "-DCLEAN=${_cli_work}/seg_objects_cmd"
          "-DEQUALS=${_cli_work}/seg_objects_cmd/report.json:objects.0.masks_missing:0|${_cli_work}/seg_objects_cmd/report.json:objects.1.masks_missing:0"
          "-DPOSITIVE=${_cli_work}/seg_objects_cmd/report.json:objects.0.counts.final|${_cli_work}/seg_objects_cmd/report.json:conflicts")
+# With fine rounds (forced: the 8-view test capture may not trigger SSS), the objects' fine
+# rounds go to the program in one batched request: two requests in all (report.json
+# segmenter_calls), each object asked about its own frames; the first object's result equals
+# the single run with the same program (check_objects.py).
+vcar_cli_test(NAME segment_segmenter_cmd_fine
+  ARGS "${_seg_common}|--segmenter-cmd|${_picker}|--set|force_fine_round=true|--out|${_cli_work}/seg_cmd_fine" RC 0
+  FIXTURES_REQUIRED vcar_cli_dataset FIXTURES_SETUP vcar_cli_cmd_fine
+  CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DPOSITIVE=${_cli_work}/seg_cmd_fine/report.json:counts.final")
+vcar_cli_test(NAME segment_objects_segmenter_cmd_fine
+  ARGS "${_seg_common}|--prompts|${_bad}/prompts_twice.json|--segmenter-cmd|${_picker}|--set|force_fine_round=true|--out|${_cli_work}/seg_objects_cmd_fine" RC 0
+  FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_bad_inputs" FIXTURES_SETUP vcar_cli_objects_cmd_fine
+  CHECKS "-DEQUALS=${_cli_work}/seg_objects_cmd_fine/report.json:segmenter_calls:2|${_cli_work}/seg_objects_cmd_fine/report.json:objects.0.masks_missing:0|${_cli_work}/seg_objects_cmd_fine/report.json:objects.1.masks_missing:0"
+         "-DSTDOUT_HAS=the segmenter asked 2 times")
+add_test(NAME cli/segment_objects_segmenter_cmd_fine_match_single_run
+  COMMAND /usr/bin/python3 ${_check_objects} ${_cli_work}/seg_objects_cmd_fine ${_cli_work}/seg_cmd_fine/selection.json target)
+set_tests_properties(cli/segment_objects_segmenter_cmd_fine_match_single_run PROPERTIES
+  FIXTURES_REQUIRED "vcar_cli_objects_cmd_fine;vcar_cli_cmd_fine")
 vcar_cli_test(NAME segment_objects_masks_folder_missing
   ARGS "${_seg_common}|--prompts|${_bad}/prompts_oracle.json|--masks|${_bad}/masks_objects|--out|${_cli_work}/seg_objects_nofolder" RC 2
   FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_bad_inputs"

@@ -270,3 +270,47 @@ TEST_CASE("ExternalSegmenter::segment_objects: every object in one request, mask
   CHECK_THAT(bad("../x"), Catch::Contains("not a folder name"));
   CHECK_THAT(bad(""), Catch::Contains("not a folder name"));
 }
+
+TEST_CASE("ExternalSegmenter::segment_objects: a batched round asks each object about its own frames") {
+  Fixture fx;
+  auto o = fx.options();
+  o.keep_requests = true;
+  ExternalSegmenter s("/usr/bin/python3 " + picker, o);
+  // red: frames 0-1 (prompt on frame 0); blue: frame 2 alone (prompt on it, at x = 30).
+  vcar::Prompt red = fx.prompt, blue = fx.prompt;
+  blue.points = {{30.5f, 5.5f}};
+  blue.reference_view = 2;
+  std::vector<std::pair<std::size_t, std::size_t>> order;
+  std::vector<std::optional<vcar::Mask>> got(3);
+  s.segment_objects(fx.frames(), {{"red", red, 0, 2}, {"blue", blue, 2, 1}},
+                    [&](std::size_t k, std::size_t q, const vcar::Mask* m) {
+                      order.emplace_back(k, q);
+                      if (m) got[k] = *m;
+                    });
+  CHECK(order == std::vector<std::pair<std::size_t, std::size_t>>{{0, 0}, {1, 0}, {2, 1}});
+  REQUIRE(got[0]);
+  REQUIRE(got[2]);
+  CHECK((*got[0])(0, 0) != 0);   // red at x = 0 on frame 0
+  CHECK((*got[2])(31, 0) != 0);  // blue at x = 31 on frame 2
+  CHECK((*got[2])(0, 0) == 0);
+  const fs::path req = s.last_request_dir();
+  CHECK(fs::exists(req / "masks" / "red" / "00001.png"));
+  CHECK_FALSE(fs::exists(req / "masks" / "red" / "00002.png"));  // outside red's frames: not asked
+  CHECK_FALSE(fs::exists(req / "masks" / "blue" / "00000.png"));
+  std::ifstream pj(req / "prompt.json");
+  const auto p = nlohmann::json::parse(pj);
+  CHECK(p["objects"][0]["frames"] == nlohmann::json::array({0, 2}));
+  CHECK(p["objects"][1]["frames"] == nlohmann::json::array({2, 1}));
+  // A range past the last frame, or a prompt frame outside the object's frames: errors.
+  auto bad = [&](ExternalSegmenter::Object ob) {
+    try {
+      s.segment_objects(fx.frames(), {ob}, [](std::size_t, std::size_t, const vcar::Mask*) {});
+    } catch (const vcar::Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  CHECK_THAT(bad({"red", red, 1, 5}), Catch::Contains("frames out of range"));
+  CHECK_THAT(bad({"red", red, 4, 1}), Catch::Contains("first frame out of range"));
+  CHECK_THAT(bad({"blue", blue, 0, 2}), Catch::Contains("prompt frame outside its frames"));
+}

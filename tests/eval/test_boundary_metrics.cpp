@@ -1,6 +1,5 @@
 #include <catch2/catch.hpp>
 
-#include <random>
 
 #include "vcar/eval/boundary_metrics.hpp"
 
@@ -88,22 +87,4 @@ TEST_CASE("boundary metrics on empty masks") {
   CHECK(vcar::eval::boundary_iou(obj, empty, 1) == 0.0);
   CHECK(vcar::eval::trimap_iou(empty, empty, 1) == 1.0);
   CHECK(vcar::eval::trimap_iou(obj, empty, 1) == 0.0);  // no GT contour: plain IoU
-}
-
-TEST_CASE("distance transform matches brute force") {
-  std::mt19937 rng(7);
-  const int W = 23, H = 17;
-  std::vector<std::uint8_t> seed(W * H, 0);
-  for (int k = 0; k < 9; ++k) seed[rng() % (W * H)] = 1;
-  const auto d2 = vcar::squared_distance_to(seed, W, H);
-  for (int y = 0; y < H; ++y)
-    for (int x = 0; x < W; ++x) {
-      double best = vcar::no_seed;
-      for (int yy = 0; yy < H; ++yy)
-        for (int xx = 0; xx < W; ++xx)
-          if (seed[yy * W + xx]) best = std::min(best, double((x - xx) * (x - xx) + (y - yy) * (y - yy)));
-      REQUIRE(d2[y * W + x] == best);
-    }
-  const auto none = vcar::squared_distance_to(std::vector<std::uint8_t>(W * H, 0), W, H);
-  CHECK(none[5] == vcar::no_seed);
 }

@@ -391,147 +391,207 @@ inline LogScales refine_boundaries(const GaussianScene& scene, const std::vector
   return std::move(a.log_scale);
 }
 
-// Stages 2 and 3 of vcar::segment from the coarse selection `selected` (scores: its R_i):
-// sphere (Eq. 4-5), view completeness (Eq. 6), SSS and the fine round (Eq. 7-8), ABR (Eq. 9-14).
-// `train_masks` holds the coarse round's training masks (indexed by training view) for ABR and
-// takes the fine round's. Fills result (indices, scores, log-scales, diagnostics); false when a
-// stage selected nothing (diagnostics.note says which). The CLI's several-objects run calls this
-// once per object after one shared coarse round.
+// Stages 2 and 3 of vcar::segment for one object, from its coarse selection `selected`
+// (scores: its R_i): sphere (Eq. 4-5), view completeness (Eq. 6), SSS and the fine round
+// (Eq. 7-8), ABR (Eq. 9-14). In steps, so that several objects can share one segmenter call
+// for their fine rounds (the CLI's several-objects run):
+//   start()      sphere, view completeness, V_sampled and the fine round's frames;
+//   has_round()  whether a fine round runs; then frames(), coarse_set(), wants_depth() and one
+//                on_mask(frame, mask, render) per frame, then end_round();
+//   finish()     Eq. R10, R8 and ABR: fills the result.
+// start(), end_round() and finish() return false when a stage selected nothing
+// (diagnostics.note says which). `train_masks` holds the coarse round's training masks (indexed
+// by training view) for ABR and takes the fine round's.
+class ObjectRefinement {
+public:
+  ObjectRefinement(const GaussianScene& scene, const std::vector<Camera>& train_cameras, const Prompt& prompt,
+                   const VcarParams& params, std::vector<std::optional<RleMask>>& train_masks,
+                   std::vector<Index> selected, std::vector<float> scores, SegmentationResult& result)
+      : scene_(scene), train_(train_cameras), prompt_(prompt), params_(params), train_masks_(train_masks),
+        selected_(std::move(selected)), scores_(std::move(scores)), result_(result), diag_(result.diagnostics),
+        order_(training_order(train_cameras.size(), prompt.reference_view)),
+        undershoot_(train_cameras.size(), 0.0) {}
+  ObjectRefinement(const ObjectRefinement&) = delete;  // the fine vote points at coarse_set_
+  ObjectRefinement& operator=(const ObjectRefinement&) = delete;
+
+  template <Renderer R>
+  bool start(R& renderer, const ProgressCallback& progress, Clock::time_point t_start) {
+    diag_.n_coarse = diag_.n_fine = diag_.n_final = selected_.size();
+    if (selected_.empty()) {
+      diag_.note = "the coarse stage selected no Gaussian (no training view shows the target, or every mask is empty)";
+      return false;
+    }
+    // ---- Stage 2: sphere (Eq. 4-5), view completeness (Eq. 6), SSS (Eq. 7-8), fine VWV. The
+    // sphere and the gap only serve SSS: with SSS off they are not computed.
+    const std::size_t ref = prompt_.reference_view;
+    AngularGap gap;
+    if (params_.enable_sss) {
+      stage(progress, t_start, "view_completeness");
+      gap = assess_completeness(scene_, selected_, train_, ref, params_, diag_);
+    }
+    diag_.sss_triggered = params_.enable_sss && (params_.force_sss || gap.Delta_max_deg > params_.Delta_th_deg);
+    if (!diag_.sss_triggered && !params_.force_fine_round) return true;
+    stage(progress, t_start, "sss");
+    if (diag_.sss_triggered) {
+      const Eigen::Vector3f up = estimate_scene_up(train_);
+      const Intrinsics intr = sampled_view_intrinsics(train_[ref], params_.sampled_intrinsics, params_.sampled_fov_deg);
+      diag_.sampled_cameras = params_.gap_directed
+          ? gap_directed_cameras(diag_.sphere, up, gap.direction, intr, params_.gap_directed_views, params_.gap_directed_cone_deg)
+          : spiral_cameras(diag_.sphere, up, intr, params_);
+    }
+    coarse_set_ = selected_;
+    auto add_frame = [&](const Camera& c, std::size_t k) {
+      // conventions §7: the code drops near-empty frames of this round, the prompt frame excepted.
+      if (k != 0 && params_.min_frame_content > 0.f &&
+          content_fraction(scene_, coarse_set_, c, renderer) < params_.min_frame_content)
+        return;
+      fine_frames_.push_back(c);
+      fine_train_.push_back(k);
+    };
+    for (std::size_t k = 0; k < order_.size(); ++k) add_frame(train_[order_[k]], k);
+    for (const Camera& c : diag_.sampled_cameras) add_frame(c, static_cast<std::size_t>(-1));
+    fine_.emplace(scene_, &coarse_set_, params_, true);
+    // Eq. R11 in the fine round only after the coarse round found masks overshooting the renders
+    // of the whole scene: this round renders G_coarse, which the masks shaped, so masks that
+    // undershoot would read as overshooting a G_coarse they eroded.
+    if (diag_.overshoot_eroded == 0) fine_->no_overshoot();
+    for (auto& m : train_masks_) m.reset();
+    return true;
+  }
+
+  bool has_round() const { return fine_.has_value(); }
+  const std::vector<Camera>& frames() const { return fine_frames_; }  // reference view first
+  const std::vector<Index>& coarse_set() const { return coarse_set_; }
+  bool wants_depth() const { return fine_ && fine_->wants_depth(); }
+
+  // The mask of fine frame k (null: none); `render` of that frame (depth and alpha) when the
+  // round kept it, else vote() renders it.
+  template <Renderer R>
+  void on_mask(std::size_t k, const Mask* m, const RenderOutput* render, R& renderer) {
+    m = vote(*fine_, fine_frames_[k], usable(m, params_), render, scene_, &coarse_set_, renderer, params_, scratch_);
+    const std::size_t t = fine_train_[k];
+    if (t < order_.size()) {
+      train_masks_[order_[t]] = m && params_.enable_abr ? std::optional<RleMask>(RleMask::encode(*m)) : std::nullopt;
+      undershoot_[order_[t]] = m ? fine_->last_undershoot_px() : 0.0;
+    }
+  }
+
+  // After the round: its timings (render, segmenter, voting) and the fine selection (Eq. 3, R7).
+  bool end_round(double render_s, double segment_s, double voting_s) {
+    timing("fine_render", render_s);
+    timing("fine_segment", segment_s);
+    timing("fine_voting", voting_s);
+    diag_.overshoot_eroded += fine_->overshoot_eroded();
+    diag_.tau_fine_applied = fine_->selected(params_.tau_fine, params_.tau_strict, params_.split_fraction, selected_, scores_);
+    split_ = diag_.tau_fine_applied < params_.tau_strict;  // R7 found the vote split
+    diag_.undershoot_applied = fine_->undershoot_applied();
+    diag_.n_fine = diag_.n_final = selected_.size();
+    fine_.reset();
+    if (selected_.empty()) {
+      diag_.note = "the fine vote kept no Gaussian (tau_fine too high for these masks?)";
+      return false;
+    }
+    return true;
+  }
+
+  bool finish(const ProgressCallback& progress, Clock::time_point t_start, std::span<const std::uint16_t> coarse_seen) {
+    // ---- Beyond the paper: hidden candidates on a seen background plane (Eq. R10), from the
+    // coarse round's occlusion test over the whole scene (coarse_seen: V^o per scene Gaussian).
+    // Not after a split fine vote (Eq. R7): masks that undershoot label the object's own seen
+    // rim background, and R10 would carry that label into the hidden part of its planes.
+    if (params_.coplanar_radius > 0.f && !coarse_seen.empty() && !split_) {
+      const auto tc = Clock::now();
+      const CoplanarParams cp{params_.coplanar_radius, params_.coplanar_angle_deg, params_.coplanar_slab};
+      const std::vector<std::size_t> drop =
+          coplanar_background(scene_, selected_, [&](Index i) { return coarse_seen[i] > 0; }, cp);  // Eq. R10
+      std::size_t w = 0;
+      for (std::size_t k = 0, d = 0; k < selected_.size(); ++k) {
+        if (d < drop.size() && drop[d] == k) { ++d; continue; }
+        selected_[w] = selected_[k];
+        scores_[w++] = scores_[k];
+      }
+      selected_.resize(w);
+      scores_.resize(w);
+      diag_.coplanar_dropped = drop.size();
+      diag_.n_final = selected_.size();
+      timing("coplanar", seconds_since(tc));
+      if (selected_.empty()) {
+        diag_.note = "Eq. R10 dropped every candidate (hidden on a background plane); set coplanar_radius=0";
+        return false;
+      }
+    }
+
+    // ---- Stage 3: ABR on the training views with masks from the latest round (Eq. 9-14, B).
+    if (params_.enable_abr) stage(progress, t_start, "abr");
+    // Eq. R8 after a split fine vote: each training mask widened by its undershoot, and the
+    // Gaussians' own footprints (no low-pass: it would widen every ellipse past masks that are
+    // already too small).
+    const bool r8 = params_.abr_undershoot && params_.enable_abr && split_;
+    VcarParams abr_params = params_;
+    if (r8) abr_params.abr_lowpass = false;
+    if (r8)
+      for (std::size_t j = 0; j < train_.size(); ++j)
+        if (train_masks_[j] && undershoot_[j] > 0.0) {
+          Mask m = train_masks_[j]->decode();
+          dilate_by_undershoot(m, undershoot_[j]);  // Eq. R8
+          train_masks_[j] = RleMask::encode(m);
+          ++diag_.abr_masks_widened;
+        }
+    result_.log_scale = refine_boundaries(scene_, selected_, train_, train_masks_, abr_params, diag_);
+    result_.indices = std::move(selected_);
+    result_.scores = std::move(scores_);
+    diag_.n_final = result_.indices.size();
+    return true;
+  }
+
+private:
+  static void stage(const ProgressCallback& progress, Clock::time_point t_start, std::string_view name) {
+    if (progress && !progress({name, 0, 0, seconds_since(t_start)})) throw Cancelled(std::string(name));
+  }
+  void timing(std::string name, double s) { diag_.timings_s.emplace_back(std::move(name), s); }
+
+  const GaussianScene& scene_;
+  const std::vector<Camera>& train_;
+  const Prompt& prompt_;
+  const VcarParams& params_;
+  std::vector<std::optional<RleMask>>& train_masks_;
+  std::vector<Index> selected_;
+  std::vector<float> scores_;
+  SegmentationResult& result_;
+  Diagnostics& diag_;
+  std::vector<std::size_t> order_;  // frame k of a round -> training view
+  std::vector<double> undershoot_;  // Eq. R6a of each training view's fine-round mask (px)
+  bool split_ = false;              // Eq. R7 kept the majority threshold
+  std::vector<Index> coarse_set_;   // G_coarse, the fine round's renders
+  std::vector<Camera> fine_frames_;
+  std::vector<std::size_t> fine_train_;  // fine frame -> training frame k (npos: sampled)
+  std::optional<RoundVote> fine_;
+  Mask scratch_;  // a mask eroded by Eq. R11
+};
+
+// Stages 2 and 3 for one object, its fine round asked of `segmenter` alone (ObjectRefinement).
 template <Renderer R, Segmenter S>
 bool refine(const GaussianScene& scene, const std::vector<Camera>& train_cameras, const Prompt& prompt, R& renderer,
             S& segmenter, const VcarParams& params, const ProgressCallback& progress, Clock::time_point t_start,
             std::vector<std::optional<RleMask>>& train_masks, std::vector<Index> selected, std::vector<float> scores,
             SegmentationResult& result, std::string_view fine_round = "fine round",
             std::span<const std::uint16_t> coarse_seen = {}) {
-  Diagnostics& diag = result.diagnostics;
-  auto stage = [&](std::string_view name) {
-    if (progress && !progress({name, 0, 0, seconds_since(t_start)})) throw Cancelled(std::string(name));
-  };
-  auto timing = [&](std::string name, double s) { diag.timings_s.emplace_back(std::move(name), s); };
-  const std::size_t M = train_cameras.size();
-  const std::size_t ref = prompt.reference_view;
-  const std::vector<std::size_t> order = training_order(M, ref);
-  std::vector<Camera> frames;
-  for (std::size_t j : order) frames.push_back(train_cameras[j]);
-  auto keep_training_mask = [&](std::size_t k, const Mask* m) {  // k: frame of the round
-    if (k < M) train_masks[order[k]] = m && params.enable_abr ? std::optional<RleMask>(RleMask::encode(*m)) : std::nullopt;
-  };
-  std::vector<double> undershoot(M, 0.0);  // Eq. R6a of each training view's fine-round mask (px)
-  bool split = false;                       // Eq. R7 kept the majority threshold
-  diag.n_coarse = diag.n_fine = diag.n_final = selected.size();
-  if (selected.empty()) {
-    diag.note = "the coarse stage selected no Gaussian (no training view shows the target, or every mask is empty)";
-    return false;
+  ObjectRefinement r(scene, train_cameras, prompt, params, train_masks, std::move(selected), std::move(scores), result);
+  if (!r.start(renderer, progress, t_start)) return false;
+  if (r.has_round()) {
+    const RoundTimes t = run_round(
+        fine_round, scene, &r.coarse_set(), r.frames(), prompt, renderer, segmenter, params, progress, t_start,
+        [&](std::size_t k, const Mask* m, const RenderOutput* render) { r.on_mask(k, m, render, renderer); },
+        result.diagnostics.masks_missing, r.wants_depth());
+    if (!r.end_round(t.render, t.total - t.render - t.voting, t.voting)) return false;
   }
+  return r.finish(progress, t_start, coarse_seen);
+}
 
-  // ---- Stage 2: sphere (Eq. 4-5), view completeness (Eq. 6), SSS (Eq. 7-8), fine VWV. The
-  // sphere and the gap only serve SSS: with SSS off they are not computed.
-  AngularGap gap;
-  if (params.enable_sss) {
-    stage("view_completeness");
-    gap = assess_completeness(scene, selected, train_cameras, ref, params, diag);
-  }
-
-  diag.sss_triggered = params.enable_sss && (params.force_sss || gap.Delta_max_deg > params.Delta_th_deg);
-  if (diag.sss_triggered || params.force_fine_round) {
-    stage("sss");
-    if (diag.sss_triggered) {
-      const Eigen::Vector3f up = estimate_scene_up(train_cameras);
-      const Intrinsics intr = sampled_view_intrinsics(train_cameras[ref], params.sampled_intrinsics, params.sampled_fov_deg);
-      diag.sampled_cameras = params.gap_directed
-          ? gap_directed_cameras(diag.sphere, up, gap.direction, intr, params.gap_directed_views, params.gap_directed_cone_deg)
-          : spiral_cameras(diag.sphere, up, intr, params);
-    }
-    const std::vector<Index> coarse_set = selected;
-    std::vector<Camera> fine_frames;
-    std::vector<std::size_t> fine_train;  // fine frame -> training frame k (npos: sampled)
-    auto add_frame = [&](const Camera& c, std::size_t k) {
-      // conventions §7: the code drops near-empty frames of this round, the prompt frame excepted.
-      if (k != 0 && params.min_frame_content > 0.f &&
-          content_fraction(scene, coarse_set, c, renderer) < params.min_frame_content)
-        return;
-      fine_frames.push_back(c);
-      fine_train.push_back(k);
-    };
-    for (std::size_t k = 0; k < frames.size(); ++k) add_frame(frames[k], k);
-    for (const Camera& c : diag.sampled_cameras) add_frame(c, static_cast<std::size_t>(-1));
-    RoundVote fine(scene, &coarse_set, params, true);
-    // Eq. R11 in the fine round only after the coarse round found masks overshooting the renders
-    // of the whole scene: this round renders G_coarse, which the masks shaped, so masks that
-    // undershoot would read as overshooting a G_coarse they eroded.
-    if (diag.overshoot_eroded == 0) fine.no_overshoot();
-    for (auto& m : train_masks) m.reset();
-    Mask scratch;  // a mask eroded by Eq. R11
-    const RoundTimes t2 = run_round(
-        fine_round, scene, &coarse_set, fine_frames, prompt, renderer, segmenter, params,
-        progress, t_start, [&](std::size_t k, const Mask* m, const RenderOutput* render) {
-          m = vote(fine, fine_frames[k], usable(m, params), render, scene, &coarse_set, renderer, params, scratch);
-          if (fine_train[k] < M) {
-            keep_training_mask(fine_train[k], m);
-            undershoot[order[fine_train[k]]] = m ? fine.last_undershoot_px() : 0.0;
-          }
-        }, diag.masks_missing, fine.wants_depth());
-    timing("fine_render", t2.render);
-    timing("fine_segment", t2.total - t2.render - t2.voting);
-    timing("fine_voting", t2.voting);
-    diag.overshoot_eroded += fine.overshoot_eroded();
-    diag.tau_fine_applied = fine.selected(params.tau_fine, params.tau_strict, params.split_fraction, selected, scores);
-    split = diag.tau_fine_applied < params.tau_strict;  // R7 found the vote split
-    diag.undershoot_applied = fine.undershoot_applied();
-    diag.n_fine = diag.n_final = selected.size();
-    if (selected.empty()) {
-      diag.note = "the fine vote kept no Gaussian (tau_fine too high for these masks?)";
-      return false;
-    }
-  }
-
-  // ---- Beyond the paper: hidden candidates on a seen background plane (Eq. R10), from the
-  // coarse round's occlusion test over the whole scene (coarse_seen: V^o per scene Gaussian).
-  // Not after a split fine vote (Eq. R7): masks that undershoot label the object's own seen
-  // rim background, and R10 would carry that label into the hidden part of its planes.
-  if (params.coplanar_radius > 0.f && !coarse_seen.empty() && !split) {
-    const auto tc = Clock::now();
-    const CoplanarParams cp{params.coplanar_radius, params.coplanar_angle_deg, params.coplanar_slab};
-    const std::vector<std::size_t> drop =
-        coplanar_background(scene, selected, [&](Index i) { return coarse_seen[i] > 0; }, cp);  // Eq. R10
-    std::size_t w = 0;
-    for (std::size_t k = 0, d = 0; k < selected.size(); ++k) {
-      if (d < drop.size() && drop[d] == k) { ++d; continue; }
-      selected[w] = selected[k];
-      scores[w++] = scores[k];
-    }
-    selected.resize(w);
-    scores.resize(w);
-    diag.coplanar_dropped = drop.size();
-    diag.n_final = selected.size();
-    timing("coplanar", seconds_since(tc));
-    if (selected.empty()) {
-      diag.note = "Eq. R10 dropped every candidate (hidden on a background plane); set coplanar_radius=0";
-      return false;
-    }
-  }
-
-  // ---- Stage 3: ABR on the training views with masks from the latest round (Eq. 9-14, B).
-  if (params.enable_abr) stage("abr");
-  // Eq. R8 after a split fine vote: each training mask widened by its undershoot, and the
-  // Gaussians' own footprints (no low-pass: it would widen every ellipse past masks that are
-  // already too small).
-  const bool r8 = params.abr_undershoot && params.enable_abr && split;
-  VcarParams abr_params = params;
-  if (r8) abr_params.abr_lowpass = false;
-  if (r8)
-    for (std::size_t j = 0; j < M; ++j)
-      if (train_masks[j] && undershoot[j] > 0.0) {
-        Mask m = train_masks[j]->decode();
-        dilate_by_undershoot(m, undershoot[j]);                                              // Eq. R8
-        train_masks[j] = RleMask::encode(m);
-        ++diag.abr_masks_widened;
-      }
-  result.log_scale = refine_boundaries(scene, selected, train_cameras, train_masks, abr_params, diag);
-  result.indices = std::move(selected);
-  result.scores = std::move(scores);
-  diag.n_final = result.indices.size();
-  return true;
+// Whether Eq. R9 can ask for a second pass of stages 2 and 3 (from the coarse selection at
+// tau_coarse_split, after a split fine vote).
+inline bool may_retake_coarse(const VcarParams& params) {
+  return params.tau_coarse_split > 0.f && params.tau_coarse_split < params.tau_coarse && params.tau_strict > params.tau_fine;
 }
 
 // Stages 2 and 3 (refine) from the coarse selection at tau_coarse, and, when Eq. R7 finds the
@@ -549,8 +609,7 @@ bool refine_from_coarse(const GaussianScene& scene, const std::vector<Camera>& t
   std::vector<Index> selected;
   std::vector<float> scores;
   coarse_selection(params.tau_coarse, selected, scores);
-  const bool may_retake = params.tau_coarse_split > 0.f && params.tau_coarse_split < params.tau_coarse &&
-                          params.tau_strict > params.tau_fine;
+  const bool may_retake = may_retake_coarse(params);
   std::vector<std::optional<RleMask>> coarse_masks;
   if (may_retake) coarse_masks = train_masks;  // run-length encoded: O(boundary) per view
   result.diagnostics.tau_coarse_applied = params.tau_coarse;

@@ -1,7 +1,8 @@
 #pragma once
 // Exact squared Euclidean distance transform of a binary image (Felzenszwalb & Huttenlocher 2012):
 // for every pixel, the squared distance between pixel centres to the nearest seed pixel. Shared by
-// the boundary metrics (eval) and the oracle's dilation/erosion (synth).
+// the boundary metrics (eval), the robust vote's mask measures (algo: Eq. R6, R11) and the
+// oracle's dilation/erosion (synth).
 #include <cstddef>
 #include <cstdint>
 #include <limits>

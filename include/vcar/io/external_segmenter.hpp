@@ -136,32 +136,47 @@ public:
 
   // One segmentation round (see the protocol above).
   void segment(const FrameSequence& frames, const Prompt& prompt, const MaskSink& sink) {
-    run_round(frames, {{std::string(), prompt}}, false,
+    run_round(frames, {{std::string(), prompt, 0, frames.size()}}, false,
               [&](std::size_t k, std::size_t, const Mask* m) { sink(k, m); });
   }
 
   // One round for several objects at once (`vcar segment --prompts`): prompt.json gets
-  // "objects": [{"name", "frame" (the frame its prompt is on), "points", "point_labels", "box",
+  // "objects": [{"name", "frame" (the frame its prompt is on), "frames": [first, count] (the
+  // frames it is asked about: first .. first + count - 1), "points", "point_labels", "box",
   // "text"}, ...] (the top-level prompt fields are the first object's), and the program writes
-  // masks/<name>/00000.png ...; `sink(frame, object, mask)` in frame order, objects inner.
+  // masks/<name>/00000.png ... for the frames of each object's range (other files are not
+  // read); `sink(frame, object, mask)` in frame order, objects inner, each object only within
+  // its range. A shared round (every object on every frame: the coarse round's renders of the
+  // whole scene) gives every object all frames; a batched round (each object's own frames one
+  // after the other: the fine rounds' renders of each object's G_coarse) gives each its part.
   // Object names must be usable as folder names ([A-Za-z0-9_.-], not "." or "..").
   using ObjectMaskSink = std::function<void(std::size_t frame, std::size_t object, const Mask*)>;
-  void segment_objects(const FrameSequence& frames, const std::vector<std::pair<std::string, Prompt>>& objects,
-                       const ObjectMaskSink& sink) {
+  static constexpr std::size_t all_frames = static_cast<std::size_t>(-1);
+  struct Object {
+    std::string name;
+    Prompt prompt;                    // reference_view: a frame of the round, inside the range
+    std::size_t first_frame = 0;      // the frames it is asked about:
+    std::size_t frames = all_frames;  //   [first_frame, first_frame + frames); all_frames: to the end
+  };
+  void segment_objects(const FrameSequence& frames, std::vector<Object> objects, const ObjectMaskSink& sink) {
     if (objects.empty()) throw Error("no object to segment", "segmenter");
-    for (const auto& [name, p] : objects) {
-      if (name.empty() || name == "." || name == ".." ||
-          name.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_.-") != std::string::npos)
-        throw Error("object name '" + name + "' is not a folder name ([A-Za-z0-9_.-])", "segmenter");
-      if (p.reference_view >= frames.size()) throw Error("object '" + name + "': prompt frame out of range", "segmenter");
+    for (Object& o : objects) {
+      if (o.name.empty() || o.name == "." || o.name == ".." ||
+          o.name.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_.-") != std::string::npos)
+        throw Error("object name '" + o.name + "' is not a folder name ([A-Za-z0-9_.-])", "segmenter");
+      if (o.first_frame > frames.size()) throw Error("object '" + o.name + "': first frame out of range", "segmenter");
+      if (o.frames == all_frames) o.frames = frames.size() - o.first_frame;
+      if (o.frames > frames.size() - o.first_frame) throw Error("object '" + o.name + "': frames out of range", "segmenter");
+      if (o.prompt.reference_view < o.first_frame || o.prompt.reference_view >= o.first_frame + o.frames)
+        throw Error("object '" + o.name + "': prompt frame outside its frames", "segmenter");
     }
     run_round(frames, objects, true, sink);
   }
 
 private:
-  void run_round(const FrameSequence& frames, const std::vector<std::pair<std::string, Prompt>>& objects, bool multi,
+  void run_round(const FrameSequence& frames, const std::vector<Object>& objects, bool multi,
                  const ObjectMaskSink& sink) {
-    const Prompt& prompt = objects.front().second;
+    const Prompt& prompt = objects.front().prompt;
     ++round_;
     failure_ = Failure::none;
     const std::string where_round = "segmenter round " + std::to_string(round_);
@@ -179,16 +194,19 @@ private:
     } cleanup{dir, options_, ok};
 
     write_request(dir, frames, prompt, where_round, multi ? &objects : nullptr);
-    run_program(dir, where_round, frames.size() * (multi ? objects.size() : 1));
+    std::size_t expected = 0;  // masks the program should write
+    for (const Object& o : objects) expected += o.frames;
+    run_program(dir, where_round, expected);
     // Each mask is decoded and checked before it goes to the sink, so a bad file fails the round
     // with its name.
     const std::size_t n = frames.size();
     for (std::size_t k = 0; k < n; ++k) {
-      for (std::size_t o = 0; o < (multi ? objects.size() : 1); ++o) {
+      for (std::size_t o = 0; o < objects.size(); ++o) {
+        if (k < objects[o].first_frame || k - objects[o].first_frame >= objects[o].frames) continue;
         const std::filesystem::path file =
-            multi ? dir / "masks" / objects[o].first / (frame_stem(k) + ".png") : dir / "masks" / (frame_stem(k) + ".png");
+            multi ? dir / "masks" / objects[o].name / (frame_stem(k) + ".png") : dir / "masks" / (frame_stem(k) + ".png");
         const std::string where = where_round + ", frame " + std::to_string(k) + " (view '" +
-                                  frames.cameras[k].name + "'" + (multi ? ", object '" + objects[o].first + "'" : "") +
+                                  frames.cameras[k].name + "'" + (multi ? ", object '" + objects[o].name + "'" : "") +
                                   ", " + file.string() + ")";
         std::error_code ec;
         if (!std::filesystem::exists(file, ec)) {
@@ -259,11 +277,11 @@ private:
 
   void write_request(const std::filesystem::path& dir, const FrameSequence& frames,
                      const Prompt& prompt, const std::string& where,
-                     const std::vector<std::pair<std::string, Prompt>>* objects = nullptr) {
+                     const std::vector<Object>* objects = nullptr) {
     std::filesystem::create_directories(dir / "frames");
     std::filesystem::create_directories(dir / "masks");
     if (objects)
-      for (const auto& o : *objects) std::filesystem::create_directories(dir / "masks" / o.first);
+      for (const Object& o : *objects) std::filesystem::create_directories(dir / "masks" / o.name);
     nlohmann::json cams = nlohmann::json::array();
     const auto t0 = std::chrono::steady_clock::now();
     for (std::size_t k = 0; k < frames.size(); ++k) {
@@ -286,10 +304,11 @@ private:
     p["frames"] = frames.size();
     if (objects) {
       nlohmann::json list = nlohmann::json::array();
-      for (const auto& [name, op] : *objects) {
-        nlohmann::json e = prompt_json(op);
-        e["name"] = name;
-        e["frame"] = op.reference_view;
+      for (const Object& o : *objects) {
+        nlohmann::json e = prompt_json(o.prompt);
+        e["name"] = o.name;
+        e["frame"] = o.prompt.reference_view;
+        e["frames"] = {o.first_frame, o.frames};
         list.push_back(std::move(e));
       }
       p["objects"] = std::move(list);
