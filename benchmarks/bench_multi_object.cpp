@@ -114,10 +114,11 @@ int main(int argc, char** argv) {
         ++multi_calls;
         for (std::size_t k = 0; k < f.size(); ++k) {
           if (pixels) (void)f.image(k);  // one image per frame, whatever the number of objects
+          vcar::synth::OracleSegmenter::FrameCasts casts;  // one ray cast per frame for the objects that see it whole
           for (std::size_t q = 0; q < req.size(); ++q) {
             if (!req[q].covers(k)) continue;  // the batched fine round: each object its own frames
             const std::optional<vcar::Mask> m =
-                oracles[req[q].object].mask(f.cameras[k], k - req[q].first_frame, f.subset);
+                oracles[req[q].object].mask(f.cameras[k], k - req[q].first_frame, f.subset, casts);
             ++multi_masks;
             sink(k, q, m ? &*m : nullptr);
           }

@@ -165,14 +165,17 @@ int run_segment_objects(const SegmentOptions& o, const GlobalOptions& g) {
       oracles.emplace_back(oracle_ds->world, op, cpu_renderer);
     }
     // Each object's frames numbered from its own first (the oracle's failure draws depend on the
-    // frame number): the same answers as in a single run.
+    // frame number): the same answers as in a single run. One ray cast per frame for the objects
+    // that see it whole (the coarse round).
     source = [&](const FrameSequence& f, const std::vector<ObjectRequest>& req, const ObjectMaskSink& sink) {
-      for (std::size_t k = 0; k < f.size(); ++k)
+      for (std::size_t k = 0; k < f.size(); ++k) {
+        synth::OracleSegmenter::FrameCasts casts;
         for (std::size_t q = 0; q < req.size(); ++q) {
           if (!req[q].covers(k)) continue;
-          const std::optional<Mask> m = oracles[req[q].object].mask(f.cameras[k], k - req[q].first_frame, f.subset);
+          const std::optional<Mask> m = oracles[req[q].object].mask(f.cameras[k], k - req[q].first_frame, f.subset, casts);
           sink(k, q, m ? &*m : nullptr);
         }
+      }
     };
   }
 

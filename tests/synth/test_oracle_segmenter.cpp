@@ -161,3 +161,31 @@ TEST_CASE("target_id picks another object than the world's target (several objec
   p.target_id = -1;  // default: the world's target
   CHECK(OracleSegmenter(w, p).mask(cam, 0)->data == visible_mask(w, cam, 1).data);
 }
+
+TEST_CASE("FrameCasts: oracles of one frame share its cast where they see it whole, with the answers of mask()") {
+  World w = two_objects();
+  w.primitives[1].t = {0.2f, -1.f, 0.f};  // the box occludes part of the sphere
+  OracleParams pt, pn;
+  pt.target_id = 1;
+  pn.target_id = 2;
+  pn.dilate_px = 2;  // failure models apply per oracle after the shared cast
+  pn.jitter_px = 3;
+  const OracleSegmenter target(w, pt), neighbour(w, pn);
+  for (const auto& cam : {front("train_000"), front("sss_001")}) {  // visible: one cast; silhouettes: one each
+    INFO(cam.name);
+    for (bool subset : {false, true}) {
+      OracleSegmenter::FrameCasts casts;
+      const auto a = target.mask(cam, 4, subset, casts), b = neighbour.mask(cam, 4, subset, casts);
+      REQUIRE(a);
+      REQUIRE(b);
+      CHECK(a->data == target.mask(cam, 4, subset)->data);
+      CHECK(b->data == neighbour.mask(cam, 4, subset)->data);
+      CHECK(a->data != b->data);
+    }
+  }
+  // A cache of another frame is not reused for this one.
+  OracleSegmenter::FrameCasts casts;
+  const auto near = front("train_000"), moved = front("train_001", 0.3f);
+  (void)target.mask(near, 0, false, casts);
+  CHECK(target.mask(moved, 1, false, casts)->data == visible_mask(w, moved, 1).data);
+}

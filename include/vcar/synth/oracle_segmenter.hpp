@@ -19,9 +19,11 @@
 // radius blob_radius_px at uniform centres.
 #include <cstdint>
 #include <cstring>
-#include <optional>
 #include <functional>
+#include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "vcar/concepts/renderer.hpp"
 #include "vcar/concepts/segmenter.hpp"
@@ -75,9 +77,36 @@ public:
 
   const OracleParams& params() const { return p_; }
 
+  // The ray casts of one frame, kept for the oracles (of one world) asked about it in turn: the
+  // ones that see the frame as the full scene share one cast, as an image model that encodes a
+  // frame once for every prompt does (the several-objects run's coarse round).
+  class FrameCasts {
+  public:
+    const IdImage& get(const OracleSegmenter& o, const Camera& cam, int only) {
+      if (cam_ != &cam || world_ != o.world_) cache_.clear();
+      cam_ = &cam;
+      world_ = o.world_;
+      for (const auto& [key, img] : cache_)
+        if (key == only) return img;
+      IdImage img = raycast(*o.world_, cam, only);
+      if (o.render_) o.render_(img, *o.world_, cam, only);
+      return cache_.emplace_back(only, std::move(img)).second;
+    }
+
+  private:
+    const Camera* cam_ = nullptr;
+    const World* world_ = nullptr;
+    std::vector<std::pair<int, IdImage>> cache_;
+  };
+
   // The answer for one frame: nullopt when dropped. `subset`: the frame renders a subset of the
   // scene (by_name answers it with the silhouette).
   std::optional<Mask> mask(const Camera& cam, std::size_t frame, bool subset = false) const {
+    FrameCasts casts;
+    return mask(cam, frame, subset, casts);
+  }
+  // The same, the ray cast taken from (or added to) `casts` of this frame.
+  std::optional<Mask> mask(const Camera& cam, std::size_t frame, bool subset, FrameCasts& casts) const {
     Rng rng(p_.seed, hash_combine(frame, hash_string(cam.name)), pose_hash(cam));
     if (rng.uniform_d() < p_.p_drop) return std::nullopt;
     const int target = p_.target_id >= 0 ? p_.target_id : world_->target_id;
@@ -85,8 +114,7 @@ public:
     const bool sil = p_.mode == OracleMode::silhouette ||
                      (p_.mode == OracleMode::by_name &&
                       (subset || (!p_.silhouette_prefix.empty() && cam.name.rfind(p_.silhouette_prefix, 0) == 0)));
-    IdImage img = raycast(*world_, cam, sil ? id : any_object);
-    if (render_) render_(img, *world_, cam, sil ? id : any_object);
+    const IdImage& img = casts.get(*this, cam, sil ? id : any_object);
     Mask m = dilate_erode(mask_of(img, id), p_.dilate_px);
     const int dx = p_.jitter_px > 0 ? rng.uniform_int(-p_.jitter_px, p_.jitter_px) : 0;
     const int dy = p_.jitter_px > 0 ? rng.uniform_int(-p_.jitter_px, p_.jitter_px) : 0;
