@@ -1,15 +1,19 @@
 // Several objects in one run (`vcar segment --prompts`, examples/vcar_cli/multi_segment.hpp)
 // against one vcar::segment run per object, on the demo's synthetic scene (target and its
 // neighbour, forward capture, robust preset). Two mask sources:
-//  - oracle: masks ray-cast from the ground truth, never looking at the frames;
+//  - oracle: masks ray-cast from the ground truth, never looking at the frames (one cast per
+//    frame for both objects where they see the same image: the coarse round's renders of the
+//    whole scene, as an image model encodes a frame once for every prompt);
 //  - pixels: the same masks, but the segmenter first asks for each frame's image, as SAM or any
 //    image model must (the frame is rendered for it).
 // Prints wall-clock medians and minima of `repeats` runs (singles and multi interleaved) and the
-// ratio multi / (sum of singles), measured in the same process; checks that each object's selection matches its single run up to the
-// Gaussians the other object won.
+// ratio multi / (sum of singles), measured in the same process; the renders, masks and
+// segmenter calls of each (the multi run: the shared coarse round, then every object's fine
+// round in one batched call); checks that each object's selection matches its single run up to
+// the Gaussians the other object won.
 //   bench_multi_object [gaussians=30000] [repeats=3] [rig=forward|orbit|sparse|hemisphere]
-// (forward: SSS runs for each object, whose fine round is its own; orbit: no gap, no fine round,
-// the shared coarse round is the whole work)
+// Each object's fine round (its training views rendered from its own G_coarse, its sampled
+// views) is its own work by design; what the objects share is the coarse round and the calls.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
