@@ -73,6 +73,18 @@ struct OneObject {
   }
 };
 
+// One call of the segmenter; its failures other than vcar::Error become one naming the round.
+inline void ask(const MultiSegmentFn& segmenter, const FrameSequence& seq, const std::vector<ObjectRequest>& requests,
+                const ObjectMaskSink& sink, const char* round) {
+  try {
+    segmenter(seq, requests, sink);
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw Error(std::string("segmenter failed: ") + e.what(), round);
+  }
+}
+
 // Stages 2 and 3 of every object (vcar::detail::ObjectRefinement), their fine rounds in one
 // segmenter call: the frames of object a, then of object b, ..., each frame rendered from its
 // object's G_coarse; each object's request covers its own frames, its prompt on the first of
@@ -164,13 +176,7 @@ void refine_objects(const GaussianScene& scene, const std::vector<Camera>& train
         throw Cancelled("fine round (all objects)");
     };
     const auto t1 = Clock::now();
-    try {
-      segmenter(seq, requests, sink);
-    } catch (const Error&) {
-      throw;
-    } catch (const std::exception& e) {
-      throw Error(std::string("segmenter failed: ") + e.what(), "fine round (all objects)");
-    }
+    ask(segmenter, seq, requests, sink, "fine round (all objects)");
     double segment_s = seconds_since(t1);
     for (std::size_t o = 0; o < K; ++o) segment_s -= t_render[o] + t_vote[o];
     for (const ObjectRequest& r : requests) {
@@ -336,13 +342,7 @@ MultiSegmentation segment_objects(const GaussianScene& scene, const std::vector<
   };
   if (progress && !progress({"coarse", 0, 0, 0.0})) throw Cancelled("coarse");
   const auto t1 = Clock::now();
-  try {
-    segmenter(seq, requests, sink);
-  } catch (const Error&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw Error(std::string("segmenter failed: ") + e.what(), "coarse round");
-  }
+  detail_multi::ask(segmenter, seq, requests, sink, "coarse round");
   for (std::size_t o = 0; o < K; ++o)
     for (std::size_t k = 0; k < M; ++k)
       if (!seen[o][k]) ++out.objects[o].diagnostics.masks_missing;

@@ -221,14 +221,30 @@ TEST_CASE("ExternalSegmenter reports progress: frames rendered, then masks writt
   CHECK(seen[rendered.size()].done == 0);  // the first report of the running phase: no mask yet
 }
 
-TEST_CASE("ExternalSegmenter::segment_objects: every object in one request, masks/<name>/") {
+namespace {
+// The colour picker keeping its requests, and two prompts: red on frame 0, blue on frame 2 (x = 30).
+struct TwoObjects {
   Fixture fx;
-  auto o = fx.options();
-  o.keep_requests = true;
-  ExternalSegmenter s("/usr/bin/python3 " + picker, o);
-  vcar::Prompt red = fx.prompt, blue = fx.prompt;
-  blue.points = {{30.5f, 5.5f}};  // frame 2 is blue at x = 30
-  blue.reference_view = 2;
+  ExternalSegmenter s{"/usr/bin/python3 " + picker, kept(fx)};
+  vcar::Prompt red = fx.prompt, blue = with_point(fx.prompt, 30.5f, 5.5f, 2);
+  static vcar::io::ExternalSegmenterOptions kept(const Fixture& f) {
+    auto o = f.options();
+    o.keep_requests = true;
+    return o;
+  }
+  static vcar::Prompt with_point(vcar::Prompt p, float x, float y, std::size_t frame) {
+    p.points = {{x, y}};
+    p.reference_view = frame;
+    return p;
+  }
+};
+}  // namespace
+
+TEST_CASE("ExternalSegmenter::segment_objects: every object in one request, masks/<name>/") {
+  TwoObjects t;
+  Fixture& fx = t.fx;
+  ExternalSegmenter& s = t.s;
+  const vcar::Prompt &red = t.red, &blue = t.blue;
   std::vector<std::vector<std::optional<vcar::Mask>>> got(2, std::vector<std::optional<vcar::Mask>>(3));
   std::vector<std::pair<std::size_t, std::size_t>> order;
   s.segment_objects(fx.frames(), {{"red", red}, {"blue", blue}}, [&](std::size_t k, std::size_t q, const vcar::Mask* m) {
@@ -272,14 +288,11 @@ TEST_CASE("ExternalSegmenter::segment_objects: every object in one request, mask
 }
 
 TEST_CASE("ExternalSegmenter::segment_objects: a batched round asks each object about its own frames") {
-  Fixture fx;
-  auto o = fx.options();
-  o.keep_requests = true;
-  ExternalSegmenter s("/usr/bin/python3 " + picker, o);
   // red: frames 0-1 (prompt on frame 0); blue: frame 2 alone (prompt on it, at x = 30).
-  vcar::Prompt red = fx.prompt, blue = fx.prompt;
-  blue.points = {{30.5f, 5.5f}};
-  blue.reference_view = 2;
+  TwoObjects t;
+  Fixture& fx = t.fx;
+  ExternalSegmenter& s = t.s;
+  const vcar::Prompt &red = t.red, &blue = t.blue;
   std::vector<std::pair<std::size_t, std::size_t>> order;
   std::vector<std::optional<vcar::Mask>> got(3);
   s.segment_objects(fx.frames(), {{"red", red, 0, 2}, {"blue", blue, 2, 1}},
