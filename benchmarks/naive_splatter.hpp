@@ -6,6 +6,10 @@
 // pixels already done. Compositing rules are conventions §3 (pixel centres at +0.5), so its
 // output equals the tiled renderer's except where the 3-sigma box is smaller than the
 // opacity-aware extent (opaque splats lose their 3.0-3.33 sigma fringe, alpha < 0.012).
+// With `pixel_lists`, it also does what OpenSplat's forward pass does for its backward pass:
+// one list per pixel of the Gaussians composited there (px2gid: one vector per pixel, a
+// push_back per composited Gaussian, reversed at the end). OpenSplat also projects with torch
+// tensor operations, which this scalar loop does not imitate (it is faster than those).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -20,7 +24,8 @@
 
 namespace vcar::bench {
 
-inline RenderOutput naive_render(const RenderRequest& q, const ProjectionParams& pp = {}) {
+inline RenderOutput naive_render(const RenderRequest& q, const ProjectionParams& pp = {},
+                                 std::vector<std::vector<std::int32_t>>* pixel_lists = nullptr) {
   const GaussianScene& sc = *q.scene;
   const Camera& cam = *q.camera;
   const int W = cam.width, H = cam.height;
@@ -54,6 +59,7 @@ inline RenderOutput naive_render(const RenderRequest& q, const ProjectionParams&
 
   std::vector<float> T(static_cast<std::size_t>(W) * H, 1.f);
   std::vector<std::uint8_t> done(T.size(), 0);
+  if (pixel_lists) pixel_lists->assign(T.size(), {});
   RenderOutput out;
   out.rgb = ImageF(W, H, 3);
   out.alpha = ImageF(W, H, 1);
@@ -82,11 +88,13 @@ inline RenderOutput naive_render(const RenderRequest& q, const ProjectionParams&
         out.rgb.data[o * 3 + 1] += w * rgb[3 * g + 1];
         out.rgb.data[o * 3 + 2] += w * rgb[3 * g + 2];
         T[o] = nT;
+        if (pixel_lists) (*pixel_lists)[o].push_back(static_cast<std::int32_t>(g));
       }
   }
   for (std::size_t o = 0; o < T.size(); ++o) {
     for (int c = 0; c < 3; ++c) out.rgb.data[o * 3 + c] += q.background[c] * T[o];
     out.alpha.data[o] = 1.f - T[o];
+    if (pixel_lists) std::reverse((*pixel_lists)[o].begin(), (*pixel_lists)[o].end());
   }
   return out;
 }
