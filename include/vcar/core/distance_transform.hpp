@@ -53,7 +53,9 @@ inline void distance_1d(const double* f, std::ptrdiff_t stride, int n, double* d
 }  // namespace detail
 
 // seed[y * width + x] != 0 marks a seed; returns squared distances (no_seed when there is none).
+// An image without pixels (width or height 0) gives an empty result.
 inline std::vector<double> squared_distance_to(const std::vector<std::uint8_t>& seed, int width, int height) {
+  if (width <= 0 || height <= 0) return {};
   const std::size_t W = static_cast<std::size_t>(width);
   std::vector<double> f(seed.size()), g(seed.size());
   for (std::size_t k = 0; k < seed.size(); ++k) f[k] = seed[k] ? 0.0 : no_seed;
