@@ -144,15 +144,10 @@ void refine_objects(const GaussianScene& scene, const std::vector<Camera>& train
       if (k >= frames.size()) throw Error("frame " + std::to_string(k) + " out of range", "fine round (all objects)");
       const std::size_t o = owner[k];
       const auto tr = Clock::now();
-      RenderRequest q;
-      q.scene = &scene;
-      q.camera = &frames[k];
-      q.subset = &refine[o]->coarse_set();
-      q.background = params.background;
-      q.want_depth = refine[o]->wants_depth();
-      RenderOutput r = renderer.render(q);
+      const bool depth = refine[o]->wants_depth();
+      RenderOutput r = vcar::detail::render_view(renderer, scene, frames[k], &refine[o]->coarse_set(), params.background, depth);
       ImageRGB8 img = to_8bit(r.rgb);
-      if (q.want_depth) last.emplace(k, std::move(r));
+      if (depth) last.emplace(k, std::move(r));
       t_render[o] += seconds_since(tr);
       return img;
     };
@@ -296,12 +291,7 @@ MultiSegmentation segment_objects(const GaussianScene& scene, const std::vector<
   double t_render = 0, t_vote = 0;
   auto render_frame = [&](std::size_t k, bool want_depth) {
     const auto tr = Clock::now();
-    RenderRequest q;
-    q.scene = &scene;
-    q.camera = &frames[k];
-    q.background = params.background;
-    q.want_depth = want_depth;
-    RenderOutput r = renderer.render(q);
+    RenderOutput r = vcar::detail::render_view(renderer, scene, frames[k], nullptr, params.background, want_depth);
     t_render += seconds_since(tr);
     return r;
   };

@@ -104,6 +104,20 @@ inline std::vector<std::size_t> training_order(std::size_t n, std::size_t refere
   return order;
 }
 
+// One render of `cam` from `subset` (null: the whole scene) over `background`, with depth when
+// asked: every render the pipeline (and the CLI's several-objects run) asks for.
+template <Renderer R>
+RenderOutput render_view(R& renderer, const GaussianScene& scene, const Camera& cam, const std::vector<Index>* subset,
+                         const Eigen::Vector3f& background = Eigen::Vector3f::Zero(), bool want_depth = false) {
+  RenderRequest q;
+  q.scene = &scene;
+  q.camera = &cam;
+  q.subset = subset;
+  q.background = background;
+  q.want_depth = want_depth;
+  return renderer.render(q);
+}
+
 struct RoundTimes {
   double render = 0, voting = 0, total = 0;
 };
@@ -129,13 +143,7 @@ RoundTimes run_round(std::string_view round, const GaussianScene& scene,
   seq.image = [&](std::size_t k) -> ImageRGB8 {
     if (k >= frames.size()) throw Error("frame " + std::to_string(k) + " out of range", std::string(round));
     const auto tr = Clock::now();
-    RenderRequest q;
-    q.scene = &scene;
-    q.camera = &frames[k];
-    q.subset = subset;
-    q.background = params.background;
-    q.want_depth = keep_depth;
-    RenderOutput out = renderer.render(q);
+    RenderOutput out = render_view(renderer, scene, frames[k], subset, params.background, keep_depth);
     ImageRGB8 img = to_8bit(out.rgb);
     if (keep_depth) last.emplace(k, std::move(out));
     t.render += seconds_since(tr);
@@ -176,11 +184,7 @@ RoundTimes run_round(std::string_view round, const GaussianScene& scene,
 // Fraction of a view's pixels that the Gaussians `subset` cover (alpha > 0.5).
 template <Renderer R>
 double content_fraction(const GaussianScene& scene, const std::vector<Index>& subset, const Camera& cam, R& renderer) {
-  RenderRequest q;
-  q.scene = &scene;
-  q.camera = &cam;
-  q.subset = &subset;
-  const RenderOutput out = renderer.render(q);
+  const RenderOutput out = render_view(renderer, scene, cam, &subset);
   std::size_t covered = 0;
   for (float a : out.alpha.data) covered += a > 0.5f;
   return out.alpha.data.empty() ? 0.0 : static_cast<double>(covered) / static_cast<double>(out.alpha.data.size());
@@ -294,12 +298,7 @@ const Mask* vote(RoundVote& voting, const Camera& cam, const Mask* m, const Rend
   }
   RenderOutput own;
   if (!render || render->depth.empty()) {
-    RenderRequest q;
-    q.scene = &scene;
-    q.camera = &cam;
-    q.subset = subset;
-    q.want_depth = true;
-    own = renderer.render(q);
+    own = render_view(renderer, scene, cam, subset, Eigen::Vector3f::Zero(), true);
     render = &own;
   }
   if (render->depth.empty() && voting.occlusion())
