@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <random>
 #include <string>
@@ -668,4 +669,95 @@ TEST_CASE("bound_minimum: a bound from some of the views leaves every minimum as
   CHECK_THROWS_AS(started.bound_minimum(0, {1.f, 1.f, 1.f}), vcar::Error);  // before the first view only
   vcar::BoundaryRefinement fresh(f.scene, cand, p);
   CHECK_THROWS_AS(fresh.bound_minimum(cand.size(), {1.f, 1.f, 1.f}), vcar::Error);  // out of range
+}
+
+TEST_CASE("trace_overflow: the lanes traced together equal B.3 written endpoint by endpoint") {
+  // Batches of different Gaussians near a disc's edge, each lane with its own running minima
+  // (+inf: traced in full, f_min: nothing to trace, or in between: marches cut short). The
+  // reference takes each lane alone: u of Eq. 9, w_d of Eq. 11, d* the first largest w_d, the
+  // reach of the march (last_sample_that_can_beat), the march (first_exit_sample on the mask) and
+  // Eq. 13 (compression_factor), for both rule sets and both mask types of the march.
+  constexpr std::size_t W = vcar::simd::width;
+  const vcar::Intrinsics k{160, 120, 150.f, 150.f, 80.f, 60.f};
+  const vcar::Camera cam = vcar::Camera::look_at({0.3f, 0.4f, 3.5f}, {0, 0, 0}, {0, 1, 0}, k);
+  vcar::Mask mask(160, 120, 1, 0);
+  for (int y = 0; y < 120; ++y)
+    for (int x = 0; x < 160; ++x) mask(x, y) = (x - 80) * (x - 80) + (y - 60) * (y - 60) < 45 * 45 ? 255 : 0;
+  vcar::MaskTiles tiles;
+  tiles.build(mask);
+  const vcar::GaussianScene g = random_gaussians(static_cast<int>(40 * W), 8, -3.5f, -1.5f);
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> U(0.f, 1.f);
+  int compared = 0, traced = 0, cut = 0, mismatches = 0;
+  for (bool reference_rules : {false, true}) {
+    vcar::AbrParams p;
+    p.reference_code_rules = reference_rules;
+    const vcar::AbrCamera C = vcar::AbrCamera::from(cam, p.projection);
+    for (std::size_t b = 0; b + W <= g.size(); b += W) {
+      // The batch's columns as BoundaryRefinement holds them.
+      alignas(64) float col[15][W];
+      for (std::size_t l = 0; l < W; ++l) {
+        const Eigen::Vector3f mu = g.mu(b + l), s = g.scale(b + l);
+        const Eigen::Matrix3f R = g.R(b + l);
+        for (int d = 0; d < 3; ++d) col[d][l] = mu[d], col[12 + d][l] = s[d];
+        for (int e = 0; e < 9; ++e) col[3 + e][l] = R(e % 3, e / 3);
+      }
+      const float* const rot[9] = {col[3], col[4], col[5], col[6], col[7], col[8], col[9], col[10], col[11]};
+      const float* const sc[3] = {col[12], col[13], col[14]};
+      vcar::AbrBatch geo;
+      vcar::abr_geometry(C, col[0], col[1], col[2], rot, sc, p.sigma_c, geo);
+      vcar::AbrLanes a;
+      unsigned lanes = 0;
+      for (std::size_t l = 0; l < W; ++l) {
+        const float pick = U(rng);
+        for (int d = 0; d < 3; ++d) {
+          a.s[d][l] = col[12 + d][l];
+          a.beat[d][l] = pick < 0.3f ? INFINITY : pick < 0.4f ? p.f_min : p.f_min + 1.1f * U(rng);
+        }
+        a.outside[l] = vcar::outside_endpoints(mask, geo, l);
+        if (geo.front[l] > 0.f && geo.det[l] > 0.f && vcar::mask_at(mask, geo.mx[l], geo.my[l]) && a.outside[l] &&
+            rng() % 5 != 0)  // some overflowing lanes left out: they must stay +inf
+          lanes |= 1u << l;
+      }
+      for (int m = 0; m < 2; ++m) {
+        if (m == 0) vcar::trace_overflow(mask, geo, lanes, p, a);
+        else vcar::trace_overflow(tiles, geo, lanes, p, a);
+        for (std::size_t l = 0; l < W; ++l) {
+          std::array<float, 3> want{INFINITY, INFINITY, INFINITY};
+          if ((lanes >> l) & 1u) {
+            const Eigen::Vector2f e1(geo.e1x[l], geo.e1y[l]), e2(-geo.e1y[l], geo.e1x[l]);
+            const std::array<Eigen::Vector2f, 3> q{geo.q(0, l), geo.q(1, l), geo.q(2, l)};
+            const Eigen::Vector3f s(a.s[0][l], a.s[1][l], a.s[2][l]);
+            for (int e = 0; e < 4; ++e) {
+              if (!((a.outside[l] >> e) & 1)) continue;
+              const Eigen::Vector2f u = (e < 2 ? e1 : e2) * (e % 2 ? -1.f : 1.f);
+              const float lambda = std::max(e < 2 ? geo.lambda1[l] : geo.lambda2[l], 0.f), L = geo.axis[e / 2][l];
+              const auto w = vcar::axis_contributions(q, s, u);
+              const int d = static_cast<int>(std::max_element(w.begin(), w.end()) - w.begin());
+              const float beat = a.beat[d][l];
+              if (!(beat > p.f_min)) continue;
+              const float step = L / 128.f;
+              const int last = vcar::last_sample_that_can_beat(beat, lambda, w, d, step, 129, p);
+              if (last < 0) continue;
+              const int x = vcar::first_exit_sample(mask, geo.m(l), u, step, last);
+              if (x > last && last < 128) continue;
+              cut += last < 128;
+              ++traced;
+              want[d] = std::min(want[d], vcar::compression_factor(x <= last ? vcar::exit_distance(x, step) : L, lambda, w, d, p));
+            }
+          }
+          for (int d = 0; d < 3; ++d) {
+            const float got = a.f[d][l];
+            const bool same = std::isinf(want[d]) ? got == want[d] : std::abs(got - want[d]) <= 1e-5f * want[d];
+            mismatches += !same;
+            ++compared;
+          }
+        }
+      }
+    }
+  }
+  CHECK(compared == 2 * 2 * 3 * 40 * static_cast<int>(W));
+  CHECK(traced > 100);  // the test exercises full and cut marches
+  CHECK(cut > 20);
+  CHECK(mismatches == 0);
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -142,4 +143,23 @@ TEST_CASE("simd: nonzero_bytes_64 and nonzero_bytes_8 set bit j iff byte j is no
       CHECK(vcar::simd::nonzero_bytes_8(v) == (want & 0xffu));
     }
   }
+}
+
+TEST_CASE("simd: nonzero_lanes sets bit l iff lane l is nonzero", "[simd]") {
+  using BI = vcar::simd::batch<std::int32_t>;
+  constexpr std::size_t L = BI::size;
+  std::mt19937 rng(23);
+  alignas(64) std::int32_t v[L];
+  for (int rep = 0; rep < 300; ++rep) {
+    std::uint32_t want = 0;
+    for (std::size_t l = 0; l < L; ++l) {
+      const int kind = static_cast<int>(rng() % 4);  // zero, small, negative, the sign bit alone
+      v[l] = kind == 0 ? 0 : kind == 1 ? static_cast<std::int32_t>(rng() % 7 + 1)
+                         : kind == 2 ? -static_cast<std::int32_t>(rng() % 1000 + 1) : std::numeric_limits<std::int32_t>::min();
+      want |= static_cast<std::uint32_t>(v[l] != 0) << l;
+    }
+    CHECK(vcar::simd::nonzero_lanes(BI::load_aligned(v)) == want);
+  }
+  CHECK(vcar::simd::nonzero_lanes(BI(0)) == 0u);
+  CHECK(vcar::simd::nonzero_lanes(BI(1)) == (L == 32 ? 0xffffffffu : (1u << L) - 1u));
 }

@@ -3,6 +3,7 @@
 // march along the signed unit direction u towards the overflowing endpoint m + L u and find the
 // first exit from the mask foreground or the image.
 #include <algorithm>
+#include <bit>
 #include <cstdint>
 
 #include <Eigen/Core>
@@ -24,11 +25,8 @@ inline int first_outside(const Mask& mask, const simd::batch<float>& x, const si
   return -1;
 }
 inline int first_outside(const MaskTiles& tiles, const simd::batch<float>& x, const simd::batch<float>& y, int n) {
-  alignas(64) std::int32_t f[simd::width];
-  mask_at(tiles, x, y).store_aligned(f);
-  for (int l = 0; l < n; ++l)
-    if (!f[l]) return l;
-  return -1;
+  const std::uint32_t out = ~simd::nonzero_lanes(mask_at(tiles, x, y)) & ((2u << (n - 1)) - 1u);  // lanes 0 .. n-1
+  return out ? std::countr_zero(out) : -1;
 }
 
 // The march of B.3: samples t_k = k step, k = 0 .. last, each looked up in the pixel that

@@ -25,6 +25,7 @@
 // spread over the axes in proportion) in place of w_{d*}.
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -75,31 +76,100 @@ struct AbrResult {
   std::size_t retraced = 0;      // refine_deferred: flagged candidates refined once more, alone
 };
 
-// Eq. 11: w_d = s_d^2 (u^T q_d)^2, the variance that axis d contributes along unit u.
-inline std::array<float, 3> axis_contributions(const std::array<Eigen::Vector2f, 3>& q,
-                                               const Eigen::Vector3f& s, const Eigen::Vector2f& u) {
-  std::array<float, 3> w{};
+namespace detail {
+
+using FloatBatch = simd::batch<float>;
+
+// Eq. 11 lane by lane: w_d = s_d^2 (u^T q_d)^2.
+inline std::array<FloatBatch, 3> axis_contributions(const FloatBatch (&qx)[3], const FloatBatch (&qy)[3],
+                                                    const FloatBatch (&s)[3], const FloatBatch& ux,
+                                                    const FloatBatch& uy) {
+  std::array<FloatBatch, 3> w;
   for (int d = 0; d < 3; ++d) {
-    const float uq = u.dot(q[d]);
+    const FloatBatch uq = ux * qx[d] + uy * qy[d];
     w[d] = s[d] * s[d] * uq * uq;
   }
   return w;
 }
 
+// Eq. 13 lane by lane, rules (a) and (c) or the reference-code rules: w_star = w_{d*}, w_sum =
+// w_0 + w_1 + w_2. The factor of the dominant axis, unclamped above; +inf: no candidate.
+inline FloatBatch compression_factor(const FloatBatch& l_u, const FloatBatch& lambda, const FloatBatch& w_star,
+                                     const FloatBatch& w_sum, const AbrParams& p) {
+  const FloatBatch zero(0.f), r = l_u / FloatBatch(p.sigma_c);
+  const FloatBatch target = r * r;  // (l_u / sigma_c)^2, px^2
+  auto none = !(w_star > zero);     // rule (c)
+  FloatBatch ws = w_star;
+  if (p.reference_code_rules) {
+    none = none | !(target < lambda);
+    ws = lambda * w_star / w_sum;  // dominant share of lambda
+  }
+  const FloatBatch numerator = target - lambda + ws;  // Eq. 13
+  const auto positive = numerator > zero;
+  const FloatBatch f = simd::select(positive, simd::sqrt(simd::select(positive, numerator, zero) / ws),
+                                    FloatBatch(p.f_min));  // Eq. 13; rule (a)
+  return simd::select(none, FloatBatch(std::numeric_limits<float>::infinity()), f);
+}
+
+// Eq. 13 solved for l_u, lane by lane: an endpoint's factor (rules as compression_factor),
+// clamped below at f_min, is below `beat` (> f_min) only where l_u < l*. Returns the march sample
+// index sigma_c l* / step + 1/2 (the exit distance (k - 1/2) step < l*), or -inf where even
+// l_u = 0 cannot beat it; last_sample turns it into the last sample a march must reach.
+inline FloatBatch march_reach(const FloatBatch& beat, const FloatBatch& lambda, const FloatBatch& w_star,
+                              const FloatBatch& w_sum, const FloatBatch& step, const AbrParams& p) {
+  const FloatBatch ws = p.reference_code_rules ? lambda * w_star / w_sum : w_star;
+  // f < beat  <=>  (l / sigma_c)^2 - lambda + w* < beat^2 w*  (Eq. 13, numerator > 0 or not)
+  const FloatBatch l2 = lambda - ws + beat * beat * ws, zero(0.f);
+  const auto can = l2 > zero;
+  const FloatBatch k = FloatBatch(p.sigma_c) * simd::sqrt(simd::select(can, l2, zero)) / step + FloatBatch(0.5f);
+  return simd::select(can, k, FloatBatch(-std::numeric_limits<float>::infinity()));
+}
+// The last sample (of `samples`) a march must reach to find every exit within `reach`, with a
+// margin of two samples for rounding; -1: none can beat.
+inline int last_sample(float reach, int samples) {
+  if (reach == -std::numeric_limits<float>::infinity()) return -1;
+  return reach < static_cast<float>(samples) ? std::min(samples - 1, static_cast<int>(reach) + 2) : samples - 1;
+}
+
+// Lane 0 of a batch.
+inline float lane0(const FloatBatch& b) {
+  alignas(64) float v[simd::width];
+  b.store_aligned(v);
+  return v[0];
+}
+
+}  // namespace detail
+
+// Eq. 11: w_d = s_d^2 (u^T q_d)^2, the variance that axis d contributes along unit u (lane 0 of
+// the batched form that BoundaryRefinement runs).
+inline std::array<float, 3> axis_contributions(const std::array<Eigen::Vector2f, 3>& q,
+                                               const Eigen::Vector3f& s, const Eigen::Vector2f& u) {
+  using B = detail::FloatBatch;
+  const B qx[3] = {B(q[0].x()), B(q[1].x()), B(q[2].x())}, qy[3] = {B(q[0].y()), B(q[1].y()), B(q[2].y())};
+  const B sb[3] = {B(s[0]), B(s[1]), B(s[2])};
+  const auto w = detail::axis_contributions(qx, qy, sb, B(u.x()), B(u.y()));
+  return {detail::lane0(w[0]), detail::lane0(w[1]), detail::lane0(w[2])};
+}
+
 // Eq. 13 with the B.3 rules (a), (c) above, or the reference-code rules: the candidate factor of
-// the dominant axis for one overflowing endpoint, unclamped above; +inf means "no candidate".
+// the dominant axis d_star for one overflowing endpoint, unclamped above; +inf means "no
+// candidate" (lane 0 of the batched form).
 inline float compression_factor(float l_u, float lambda, const std::array<float, 3>& w, int d_star,
                                 const AbrParams& p) {
-  const float target = (l_u / p.sigma_c) * (l_u / p.sigma_c);  // (l_u / sigma_c)^2, px^2
-  float w_star = w[d_star];
-  if (!(w_star > 0.f)) return std::numeric_limits<float>::infinity();  // rule (c)
-  if (p.reference_code_rules) {
-    if (!(target < lambda)) return std::numeric_limits<float>::infinity();
-    w_star = lambda * w_star / (w[0] + w[1] + w[2]);  // dominant share of lambda
-  }
-  const float numerator = target - lambda + w_star;  // Eq. 13
-  if (!(numerator > 0.f)) return p.f_min;            // rule (a)
-  return std::sqrt(numerator / w_star);              // Eq. 13
+  using B = detail::FloatBatch;
+  return detail::lane0(detail::compression_factor(B(l_u), B(lambda), B(w[d_star]), B(w[0] + w[1] + w[2]), p));
+}
+
+// Eq. 13 solved for l_u: the factor of an endpoint (rules as compression_factor), clamped below
+// at f_min, is below `beat` (> f_min) only where l_u < l*. The factor grows with l_u, and so
+// does the march's l_u with its exit sample: returns the last sample a march must reach to find
+// every exit whose factor can be below `beat` (with a margin of two samples for rounding), -1
+// when even l_u = 0 cannot beat it (lane 0 of the batched form).
+inline int last_sample_that_can_beat(float beat, float lambda, const std::array<float, 3>& w, int d_star,
+                                     float step, int samples, const AbrParams& p) {
+  using B = detail::FloatBatch;
+  return detail::last_sample(
+      detail::lane0(detail::march_reach(B(beat), B(lambda), B(w[d_star]), B(w[0] + w[1] + w[2]), B(step), p)), samples);
 }
 
 // What one view says about one Gaussian (B.1-B.3).
@@ -111,76 +181,103 @@ struct AbrObservation {
                          std::numeric_limits<float>::infinity()};
 };
 
-// Eq. 13 solved for l_u: the factor of an endpoint (rules as compression_factor), clamped below
-// at f_min, is below `beat` (> f_min) only where l_u < l*. The factor grows with l_u, and so
-// does the march's l_u with its exit sample: returns the last sample a march must reach to find
-// every exit whose factor can be below `beat` (with a margin of two samples for rounding).
-inline int last_sample_that_can_beat(float beat, float lambda, const std::array<float, 3>& w, int d_star,
-                                     float step, int samples, const AbrParams& p) {
-  float w_star = w[d_star];
-  if (p.reference_code_rules) w_star = lambda * w_star / (w[0] + w[1] + w[2]);
-  // f < beat  <=>  (l / sigma_c)^2 - lambda + w* < beat^2 w*  (Eq. 13, numerator > 0 or not)
-  const float l2 = lambda - w_star + beat * beat * w_star;
-  if (!(l2 > 0.f)) return -1;  // even l_u = 0 cannot beat it
-  const float k = p.sigma_c * std::sqrt(l2) / step + 0.5f;  // l_u(k) = (k - 1/2) step < l*
-  return k < static_cast<float>(samples) ? std::min(samples - 1, static_cast<int>(k) + 2) : samples - 1;
+// What the tracing of overflowing endpoints reads and writes for the simd::width Gaussians of
+// one AbrBatch, lane by lane.
+struct AbrLanes {
+  static constexpr std::size_t L = simd::width;
+  alignas(64) float s[3][L];            // scales s_d
+  // The running minimum per axis, clamped below at f_min: an endpoint whose clamped factor
+  // cannot be below it is not traced (its factor stays +inf); +inf traces every endpoint in full.
+  alignas(64) float beat[3][L];
+  alignas(64) std::int32_t outside[L];  // bit k: endpoint k (Eq. 9's order) outside the mask or image
+  alignas(64) float f[3][L];            // out: smallest candidate factor per axis, +inf: none
+};
+
+// Bit k set when 3-sigma endpoint k (Eq. 9) of lane l lies outside the foreground or the image
+// (B.1), looked up without a branch per endpoint: most Gaussians have none.
+inline std::int32_t outside_endpoints(const Mask& mask, const AbrBatch& g, std::size_t l) {
+  std::int32_t bits = 0;
+  for (int k = 0; k < 4; ++k) bits |= static_cast<std::int32_t>(!mask_at_branchless(mask, g.ex[k][l], g.ey[k][l])) << k;
+  return bits;
 }
 
-// Lane l of `g` (abr_geometry of one view), a Gaussian with scales s whose centre lies on the
-// mask's foreground (B.1): the 3-sigma endpoints (Eq. 9) and, for each endpoint outside the mask,
-// Eq. 11-13 (B.3). A degenerate covariance is not eligible (as project_gaussian, rule (e)).
-// `beat` (optional): the candidate's running minimum per axis, clamped below at f_min (see
-// BoundaryRefinement). An endpoint whose factor, clamped, cannot be below beat[d*] is not
-// traced (its f stays +inf): the clamped minimum over views is the same, the march shorter or
-// none. Without it every overflowing endpoint is traced in full. `march`: the mask the march
-// reads, the Mask itself or its MaskTiles (the same answers).
+// B.3 for the lanes of g set in `lanes` (Gaussians whose centre lies on the mask's foreground and
+// some of whose endpoints, a.outside, do not): for each such endpoint, u (Eq. 9), w_d (Eq. 11), d*
+// (ties to the lowest axis, rule (f)), the march to the boundary l_u (B.3, at most to the last
+// sample whose exit can beat a.beat[d*]), and the factor of Eq. 13 into a.f[d*] (the smallest over
+// the endpoints). The arithmetic runs across lanes; the march, lane by lane, reads `march`, the
+// Mask itself or its MaskTiles (the same answers). Lanes outside `lanes` get +inf.
 template <class MarchMask>
-[[gnu::always_inline]] inline AbrObservation observe_lane(const Mask& mask, const MarchMask& march, const AbrBatch& g,
-                                                          std::size_t l, const Eigen::Vector3f& s, const AbrParams& p,
-                                                          const std::array<float, 3>* beat = nullptr) {
-  AbrObservation obs;
-  if (!(g.det[l] > 0.f) || !(1.f >= p.projection.alpha_min)) return obs;  // degenerate: rule (e)
-  obs.eligible = true;
-  // Endpoints m +- a e1, m +- b e2 (Eq. 9) outside the foreground or the image (B.1), one bit
-  // each, looked up without a branch per endpoint: most Gaussians have none.
-  unsigned outside = 0;
-  for (int k = 0; k < 4; ++k) outside |= static_cast<unsigned>(!mask_at_branchless(mask, g.ex[k][l], g.ey[k][l])) << k;
-  if (!outside) return obs;
-  obs.overflow = true;
-  const Eigen::Vector2f m = g.m(l), e1(g.e1x[l], g.e1y[l]);
-  const std::array<Eigen::Vector2f, 3> q{g.q(0, l), g.q(1, l), g.q(2, l)};
-  const float lambdas[2] = {std::max(g.lambda1[l], 0.f), std::max(g.lambda2[l], 0.f)};
-  const Eigen::Vector2f axes[2] = {e1, Eigen::Vector2f(-e1.y(), e1.x())};
+inline void trace_overflow(const MarchMask& march, const AbrBatch& g, unsigned lanes, const AbrParams& p, AbrLanes& a) {
+  using B = detail::FloatBatch;
+  constexpr std::size_t W = simd::width;
+  const B zero(0.f), inf(std::numeric_limits<float>::infinity());
+  B F[3] = {inf, inf, inf};
+  const int samples = p.boundary_samples;
+  const B s[3] = {B::load_aligned(a.s[0]), B::load_aligned(a.s[1]), B::load_aligned(a.s[2])};
+  const B beat[3] = {B::load_aligned(a.beat[0]), B::load_aligned(a.beat[1]), B::load_aligned(a.beat[2])};
+  const B qx[3] = {B::load_aligned(g.qx[0]), B::load_aligned(g.qx[1]), B::load_aligned(g.qx[2])};
+  const B qy[3] = {B::load_aligned(g.qy[0]), B::load_aligned(g.qy[1]), B::load_aligned(g.qy[2])};
+  const B l1 = B::load_aligned(g.lambda1), l2 = B::load_aligned(g.lambda2);
+  const B lam[2] = {simd::select(l1 < zero, zero, l1), simd::select(l2 < zero, zero, l2)};  // max(lambda, 0)
+  const B e1x = B::load_aligned(g.e1x), e1y = B::load_aligned(g.e1y);
+  const B axis[2] = {B::load_aligned(g.axis[0]), B::load_aligned(g.axis[1])};  // a, b (Eq. 9)
+  const B steps[2] = {axis[0] / B(static_cast<float>(samples - 1)), axis[1] / B(static_cast<float>(samples - 1))};
+  alignas(64) float ux_[W], uy_[W], step_[W], reach_[W], c_[W], L_[W], lu_[W], traced_[W];
   for (int k = 0; k < 4; ++k) {
-    if (!((outside >> k) & 1u)) continue;
-    const float lambda = lambdas[k >> 1];
-    const Eigen::Vector2f u = (k & 1) ? Eigen::Vector2f(-axes[k >> 1]) : axes[k >> 1];
-    const float L = g.axis[k >> 1][l];  // a or b
-    const std::array<float, 3> w = axis_contributions(q, s, u);  // Eq. 11
-    const int d_star = w[1] > w[0] ? (w[2] > w[1] ? 2 : 1) : (w[2] > w[0] ? 2 : 0);  // d* = argmax w_d (Eq. 11)
-    float l_u = L;
-    const float step = L / static_cast<float>(p.boundary_samples - 1);
-    if (beat) {  // only an exit whose factor can lower the clamped minimum matters
-      const float c = (*beat)[d_star];
-      if (!(c > p.f_min)) continue;
-      const int last = last_sample_that_can_beat(c, lambda, w, d_star, step, p.boundary_samples, p);
-      if (last < 0) continue;
-      const int k = first_exit_sample(march, m, u, step, last);  // B.3
-      if (k > last && last < p.boundary_samples - 1) continue;  // no exit within reach
-      if (k <= last) l_u = exit_distance(k, step);
-    } else {
-      l_u = boundary_distance(march, m, u, L, p.boundary_samples);  // B.3
+    unsigned act = 0;
+    for (unsigned m = lanes; m; m &= m - 1) {
+      const int l = std::countr_zero(m);
+      act |= static_cast<unsigned>((a.outside[l] >> k) & 1) << l;
     }
-    const float f = compression_factor(l_u, lambda, w, d_star, p);  // Eq. 13
-    obs.f[d_star] = std::min(obs.f[d_star], f);
+    if (!act) continue;
+    // u: +e1, -e1, +e2, -e2 with e2 = (-e1.y, e1.x) (Eq. 9's endpoint order).
+    const B vx = (k >> 1) ? -e1y : e1x, vy = (k >> 1) ? e1x : e1y;
+    const B ux = (k & 1) ? -vx : vx, uy = (k & 1) ? -vy : vy;
+    const std::array<B, 3> w = detail::axis_contributions(qx, qy, s, ux, uy);  // Eq. 11
+    const auto c10 = w[1] > w[0], c21 = w[2] > w[1], c20 = w[2] > w[0];  // d* = argmax w_d (Eq. 11)
+    const auto is2 = (c10 & c21) | (!c10 & c20), is1 = c10 & !c21;
+    const B w_star = simd::select(is2, w[2], simd::select(is1, w[1], w[0]));
+    const B c = simd::select(is2, beat[2], simd::select(is1, beat[1], beat[0]));
+    const B w_sum = w[0] + w[1] + w[2];
+    const B lambda = lam[k >> 1], step = steps[k >> 1];
+    ux.store_aligned(ux_);
+    uy.store_aligned(uy_);
+    step.store_aligned(step_);
+    axis[k >> 1].store_aligned(L_);
+    c.store_aligned(c_);
+    detail::march_reach(c, lambda, w_star, w_sum, step, p).store_aligned(reach_);
+    unsigned traced = 0;
+    for (unsigned m = act; m; m &= m - 1) {
+      const int l = std::countr_zero(m);
+      if (!(c_[l] > p.f_min)) continue;  // the minimum is already f_min
+      const int last = detail::last_sample(reach_[l], samples);
+      if (last < 0) continue;
+      const int e = first_exit_sample(march, g.m(static_cast<std::size_t>(l)), Eigen::Vector2f(ux_[l], uy_[l]), step_[l], last);  // B.3
+      if (e > last && last < samples - 1) continue;  // no exit within reach
+      lu_[l] = e <= last ? exit_distance(e, step_[l]) : L_[l];
+      traced |= 1u << l;
+    }
+    if (!traced) continue;
+    for (std::size_t l = 0; l < W; ++l) {
+      traced_[l] = static_cast<float>((traced >> l) & 1u);
+      if (!((traced >> l) & 1u)) lu_[l] = 0.f;
+    }
+    const B f = detail::compression_factor(B::load_aligned(lu_), lambda, w_star, w_sum, p);  // Eq. 13
+    const auto on = B::load_aligned(traced_) > zero;
+    const auto is0 = !is1 & !is2;
+    F[0] = simd::select(on & is0 & (f < F[0]), f, F[0]);
+    F[1] = simd::select(on & is1 & (f < F[1]), f, F[1]);
+    F[2] = simd::select(on & is2 & (f < F[2]), f, F[2]);
   }
-  return obs;
+  for (int d = 0; d < 3; ++d) F[d].store_aligned(a.f[d]);
 }
 
 // One Gaussian (mean mu, rotation R with columns r_d, scales s) in one view with its mask: B.1
-// (the centre between the near and far planes and on the mask's foreground), then observe_lane.
-// The reference that BoundaryRefinement equals; it computes the geometry as the refinement does
-// (abr_geometry, here with the Gaussian in every lane). Assumes a camera-sized mask.
+// (the centre between the near and far planes and on the mask's foreground, a covariance that is
+// not degenerate, rule (e)), then trace_overflow with every endpoint traced in full. The
+// reference that BoundaryRefinement equals; it computes as the refinement does (abr_geometry and
+// trace_overflow, here with the Gaussian in every lane). Assumes a camera-sized mask.
 inline AbrObservation observe_gaussian(const Camera& cam, const Mask& mask, const Eigen::Vector3f& mu,
                                        const Eigen::Matrix3f& R, const Eigen::Vector3f& s,
                                        const AbrParams& p) {
@@ -195,7 +292,19 @@ inline AbrObservation observe_gaussian(const Camera& cam, const Mask& mask, cons
   AbrBatch g;
   abr_geometry(AbrCamera::from(cam, p.projection), col[0], col[1], col[2], rot, sc, p.sigma_c, g);
   if (!(g.front[0] > 0.f) || !mask_at(mask, g.mx[0], g.my[0])) return {};  // B.1, rule (e)
-  return observe_lane(mask, mask, g, 0, s, p);
+  if (!(g.det[0] > 0.f) || !(1.f >= p.projection.alpha_min)) return {};    // degenerate: rule (e)
+  AbrObservation obs;
+  obs.eligible = true;
+  AbrLanes a;
+  for (std::size_t l = 0; l < L; ++l) {
+    a.outside[l] = outside_endpoints(mask, g, 0);
+    for (int d = 0; d < 3; ++d) a.s[d][l] = s[d], a.beat[d][l] = std::numeric_limits<float>::infinity();
+  }
+  if (!a.outside[0]) return obs;
+  obs.overflow = true;
+  trace_overflow(mask, g, 1u, p, a);
+  for (int d = 0; d < 3; ++d) obs.f[d] = a.f[d][0];
+  return obs;
 }
 
 class BoundaryRefinement {
@@ -318,7 +427,7 @@ class BoundaryRefinement {
   // of the same candidate over some of the same views with the same parameters. Observing every
   // view then ends at the same minimum (a minimum over views, and the bound is one of its
   // terms), while an endpoint whose factor cannot beat the bound is never traced
-  // (observe_lane's `beat`). refine_deferred bounds its second pass with the first pass's
+  // (trace_overflow's beat). refine_deferred bounds its second pass with the first pass's
   // minima. Call before the first view; not with carry (whose minima remember their views).
   void bound_minimum(std::size_t k, const std::array<float, 3>& bound) {
     if (views_ != 0) throw Error("bound_minimum is called before the first view", "BoundaryRefinement");
@@ -543,7 +652,7 @@ class BoundaryRefinement {
   // Multi-view minimum per axis (B.3) of the factors clamped below at f_min, remembering the view
   // that set it. finish() clamps the minimum to [f_min, 1]: max(f_min, min_v f_v) = min_v
   // max(f_min, f_v), so clamping each view's factor first changes nothing there, and it lets
-  // observe_projected skip every endpoint that cannot lower the minimum (its `beat`).
+  // trace_overflow skip every endpoint that cannot lower the minimum (its beat).
   void min_into(std::size_t k, const AbrObservation& obs, std::uint16_t view) {
     for (int d = 0; d < 3; ++d) {
       const float f = std::max(params_.f_min, obs.f[d]);
@@ -556,7 +665,7 @@ class BoundaryRefinement {
   }
 
   // One view: apply(k, obs) for every slot k with want(k) whose centre is eligible (B.1), obs as
-  // observe_gaussian gives it (abr_geometry simd::width slots at a time, the mask lane by lane).
+  // observe_gaussian gives it (abr_geometry and trace_overflow simd::width slots at a time).
   // With `tiles` (tiles_ built from this mask) whole chunks that the mask's tiles decide skip
   // the covariance (same counts and minima).
   // `boxes` (optional) lists the chunk boxes that hold a wanted slot; the others are skipped.
@@ -565,8 +674,7 @@ class BoundaryRefinement {
   void observe_view(const Camera& cam, const Mask& mask, bool tiles, Want want, Apply apply,
                     const std::vector<std::uint32_t>* boxes = nullptr, Trace trace = &always) {
     const AbrParams p = params_;
-    constexpr float lowest = -std::numeric_limits<float>::infinity();
-    const std::array<float, 3> no_factors{lowest, lowest, lowest};
+    if (!(1.f >= p.projection.alpha_min)) return;  // rule (e): no Gaussian is eligible
     AbrObservation inside;  // eligible, no endpoint outside, no factor
     inside.eligible = true;
     const detail::MeanProjection P = detail::MeanProjection::from(cam);
@@ -589,34 +697,53 @@ class BoundaryRefinement {
         }
         // observe_gaussian, simd::width slots at a time (kBox is a whole number of batches).
         AbrBatch g;
-        alignas(64) std::int32_t centre[simd::width], outside[simd::width];
-        const bool batch_tests = tiles && 1.f >= p.projection.alpha_min;
+        AbrLanes a;
+        alignas(64) std::int32_t centre[simd::width];
         for (std::size_t j = j0; j < j1; j += simd::width) {
           const std::size_t lanes = std::min(simd::width, j1 - j);
           bool wanted = false;
           for (std::size_t l = 0; l < lanes && !wanted; ++l) wanted = want(j + l);
           if (!wanted) continue;
           geometry(C, j, g);
-          // With the tiles: every lane's centre and endpoint lookups at once, from the packed
-          // bits. A lane whose centre is eligible and whose endpoints all lie on foreground is
-          // observe_lane's "eligible, no overflow" without tracing.
-          if (batch_tests) lane_tests(g, centre, outside);
+          // B.1 and rule (e) per lane: with the tiles every lane's centre and endpoint lookups at
+          // once from the packed bits, else lane by lane on the mask (the same answers).
+          if (tiles) {
+            lane_tests(g, centre, a.outside);
+          } else {
+            for (std::size_t l = 0; l < lanes; ++l) {
+              centre[l] = g.front[l] > 0.f && g.det[l] > 0.f && mask_at(mask, g.mx[l], g.my[l]);
+              a.outside[l] = centre[l] ? outside_endpoints(mask, g, l) : 0;
+            }
+          }
+          // A lane whose centre is eligible and whose endpoints all lie on foreground is
+          // "eligible, no overflow" without tracing; the others are traced together.
+          unsigned overflowing = 0, traced = 0;
           for (std::size_t l = 0; l < lanes; ++l) {
             const std::size_t k = j + l;
-            if (batch_tests) {
-              if (!centre[l] || !want(k)) continue;  // B.1, rule (e)
-              if (!outside[l]) {
-                apply(k, inside);
-                continue;
-              }
-            } else if (!want(k) || !(g.front[l] > 0.f) || !mask_at(mask, g.mx[l], g.my[l])) {
-              continue;  // B.1, rule (e)
+            if (!centre[l] || !want(k)) continue;  // B.1, rule (e)
+            if (!a.outside[l]) {
+              apply(k, inside);
+              continue;
             }
-            const Eigen::Vector3f s(s_[0][k], s_[1][k], s_[2][k]);
-            const std::array<float, 3> beat = trace(k) ? std::array<float, 3>{f_[0][k], f_[1][k], f_[2][k]} : no_factors;
-            const AbrObservation obs = tiles ? observe_lane(mask, tiles_, g, l, s, p, &beat)
-                                             : observe_lane(mask, mask, g, l, s, p, &beat);
-            if (obs.eligible) apply(k, obs);
+            overflowing |= 1u << l;
+            if (!trace(k)) continue;
+            traced |= 1u << l;
+            for (int d = 0; d < 3; ++d) a.s[d][l] = s_[d][k], a.beat[d][l] = f_[d][k];
+          }
+          if (traced) {
+            for (std::size_t l = 0; l < simd::width; ++l)  // lanes not traced: any finite values
+              if (!((traced >> l) & 1u))
+                for (int d = 0; d < 3; ++d) a.s[d][l] = 0.f, a.beat[d][l] = 0.f;
+            if (tiles) trace_overflow(tiles_, g, traced, p, a);
+            else trace_overflow(mask, g, traced, p, a);
+          }
+          for (unsigned m = overflowing; m; m &= m - 1) {
+            const auto l = static_cast<std::size_t>(std::countr_zero(m));
+            AbrObservation obs;
+            obs.eligible = obs.overflow = true;
+            if ((traced >> l) & 1u)
+              for (int d = 0; d < 3; ++d) obs.f[d] = a.f[d][l];
+            apply(j + l, obs);
           }
         }
       }
@@ -625,9 +752,8 @@ class BoundaryRefinement {
 
   // Per lane of g, from tiles_ (the current mask's bits): centre[l] = 1 when the centre lies
   // between the planes, inside the image, on foreground, and Sigma2D is not degenerate (B.1,
-  // rule (e): observe_lane's eligibility); outside[l] = 1 when some 3-sigma endpoint (Eq. 9) lies
-  // outside the image or on background (B.1). The same answers as mask_at / mask_at_branchless
-  // on the mask, lane by lane.
+  // rule (e)); bit k of outside[l] set when 3-sigma endpoint k (Eq. 9) lies outside the image or
+  // on background (B.1). The same answers as mask_at and outside_endpoints on the mask.
   void lane_tests(const AbrBatch& g, std::int32_t* centre, std::int32_t* outside) const {
     using BF = simd::batch<float>;
     using BI = simd::batch<std::int32_t>;
@@ -636,9 +762,9 @@ class BoundaryRefinement {
     const BI ok = simd::to_int(simd::select((BF::load_aligned(g.front) > zero) & (BF::load_aligned(g.det) > zero),
                                             BF(1.f), zero));
     (foreground(g.mx, g.my) & ok).store_aligned(centre);
-    BI all = foreground(g.ex[0], g.ey[0]);
-    for (int k = 1; k < 4; ++k) all = all & foreground(g.ex[k], g.ey[k]);
-    (BI(1) - all).store_aligned(outside);
+    BI bits = BI(1) - foreground(g.ex[0], g.ey[0]);
+    for (int k = 1; k < 4; ++k) bits = bits | ((BI(1) - foreground(g.ex[k], g.ey[k])) << k);
+    bits.store_aligned(outside);
   }
 
   // abr_geometry of slots [j, j + simd::width) in the view C.

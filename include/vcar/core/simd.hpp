@@ -288,4 +288,26 @@ inline std::uint64_t nonzero_bytes_64(const std::uint8_t* p) {
 #endif
 }
 
+
+// Bit l set iff lane l of v is nonzero: one AVX-512 test, an AVX2 or SSE2 compare with
+// movemask, elsewhere lane by lane. The same bits on every target.
+inline std::uint32_t nonzero_lanes(const batch<std::int32_t>& v) {
+#if !defined(VCAR_SIMD_SCALAR) && defined(__AVX512F__)
+  const __m512i x = v;
+  return _mm512_test_epi32_mask(x, x);
+#elif !defined(VCAR_SIMD_SCALAR) && defined(__AVX2__)
+  const __m256i x = v;
+  return ~static_cast<std::uint32_t>(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(x, _mm256_setzero_si256())))) & 0xffu;
+#elif !defined(VCAR_SIMD_SCALAR) && defined(__SSE2__)
+  const __m128i x = v;
+  return ~static_cast<std::uint32_t>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(x, _mm_setzero_si128())))) & 0xfu;
+#else
+  alignas(64) std::int32_t a[batch<std::int32_t>::size];
+  v.store_aligned(a);
+  std::uint32_t bits = 0;
+  for (std::size_t l = 0; l < batch<std::int32_t>::size; ++l) bits |= static_cast<std::uint32_t>(a[l] != 0) << l;
+  return bits;
+#endif
+}
+
 }  // namespace vcar::simd
