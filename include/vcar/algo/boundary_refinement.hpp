@@ -225,11 +225,7 @@ inline void trace_overflow(const MarchMask& march, const AbrBatch& g, unsigned l
   const B steps[2] = {axis[0] / B(static_cast<float>(samples - 1)), axis[1] / B(static_cast<float>(samples - 1))};
   alignas(64) float ux_[W], uy_[W], step_[W], reach_[W], c_[W], L_[W], lu_[W], traced_[W];
   for (int k = 0; k < 4; ++k) {
-    unsigned act = 0;
-    for (unsigned m = lanes; m; m &= m - 1) {
-      const int l = std::countr_zero(m);
-      act |= static_cast<unsigned>((a.outside[l] >> k) & 1) << l;
-    }
+    const unsigned act = lanes & simd::nonzero_lanes(simd::batch<std::int32_t>::load_aligned(a.outside) & simd::batch<std::int32_t>(1 << k));
     if (!act) continue;
     // u: +e1, -e1, +e2, -e2 with e2 = (-e1.y, e1.x) (Eq. 9's endpoint order).
     const B vx = (k >> 1) ? -e1y : e1x, vy = (k >> 1) ? e1x : e1y;
@@ -502,7 +498,7 @@ class BoundaryRefinement {
         if (obs.overflow) --n_ovf_[k];
         for (int d = 0; d < 3; ++d)
           if (arg_[d][k] == view) mode_[k] = stale;  // this view set a minimum
-      }, nullptr, &never);
+      }, nullptr, Never{});
     }
     if (new_mask) {
       check_view(cam, *new_mask, view);
@@ -611,8 +607,12 @@ class BoundaryRefinement {
   // Whether building the mask tiles for `observed` candidates pays: under one candidate per 256
   // pixels they are observed one by one on the mask itself (the same result either way).
   static bool tiles_pay(std::size_t observed, const Mask& mask) { return observed * 256 >= mask.pixels(); }
-  static bool always(std::size_t) { return true; }
-  static bool never(std::size_t) { return false; }
+  struct Always {  // trace every slot (a type, not a function pointer: inlined per lane)
+    bool operator()(std::size_t) const { return true; }
+  };
+  struct Never {
+    bool operator()(std::size_t) const { return false; }
+  };
   enum : std::uint8_t { carried = 0, fresh = 1, stale = 2 };
 
   void check_view(const Camera& cam, const Mask& mask, std::uint16_t view) const {
@@ -670,9 +670,9 @@ class BoundaryRefinement {
   // the covariance (same counts and minima).
   // `boxes` (optional) lists the chunk boxes that hold a wanted slot; the others are skipped.
   // `trace(k)` false: apply needs slot k's counts only (no endpoint is traced, obs.f stays +inf).
-  template <class Want, class Apply, class Trace = bool (*)(std::size_t)>
+  template <class Want, class Apply, class Trace = Always>
   void observe_view(const Camera& cam, const Mask& mask, bool tiles, Want want, Apply apply,
-                    const std::vector<std::uint32_t>* boxes = nullptr, Trace trace = &always) {
+                    const std::vector<std::uint32_t>* boxes = nullptr, Trace trace = {}) {
     const AbrParams p = params_;
     if (!(1.f >= p.projection.alpha_min)) return;  // rule (e): no Gaussian is eligible
     AbrObservation inside;  // eligible, no endpoint outside, no factor
