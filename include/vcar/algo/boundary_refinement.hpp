@@ -38,6 +38,7 @@
 #include "vcar/algo/boundary_distance.hpp"
 #include "vcar/algo/mean_projection.hpp"
 #include "vcar/core/camera.hpp"
+#include "vcar/core/default_init_allocator.hpp"
 #include "vcar/core/error.hpp"
 #include "vcar/core/gaussian_scene.hpp"
 #include "vcar/core/image.hpp"
@@ -205,8 +206,10 @@ inline std::int32_t outside_endpoints(const Mask& mask, const AbrBatch& g, std::
 // some of whose endpoints, a.outside, do not): for each such endpoint, u (Eq. 9), w_d (Eq. 11), d*
 // (ties to the lowest axis, rule (f)), the march to the boundary l_u (B.3, at most to the last
 // sample whose exit can beat a.beat[d*]), and the factor of Eq. 13 into a.f[d*] (the smallest over
-// the endpoints). The arithmetic runs across lanes; the march, lane by lane, reads `march`, the
-// Mask itself or its MaskTiles (the same answers). Lanes outside `lanes` get +inf.
+// the endpoints). The arithmetic runs across lanes, once per ellipse axis (its two endpoints
+// share d* and Eq. 13, and their minimum is the factor of the shorter l_u); the march, lane by
+// lane, reads `march`, the Mask itself or its MaskTiles (the same answers). Lanes outside
+// `lanes` get +inf.
 template <class MarchMask>
 inline void trace_overflow(const MarchMask& march, const AbrBatch& g, unsigned lanes, const AbrParams& p, AbrLanes& a) {
   using B = detail::FloatBatch;
@@ -224,35 +227,45 @@ inline void trace_overflow(const MarchMask& march, const AbrBatch& g, unsigned l
   const B axis[2] = {B::load_aligned(g.axis[0]), B::load_aligned(g.axis[1])};  // a, b (Eq. 9)
   const B steps[2] = {axis[0] / B(static_cast<float>(samples - 1)), axis[1] / B(static_cast<float>(samples - 1))};
   alignas(64) float ux_[W], uy_[W], step_[W], reach_[W], c_[W], L_[W], lu_[W], traced_[W];
-  for (int k = 0; k < 4; ++k) {
-    const unsigned act = lanes & simd::nonzero_lanes(simd::batch<std::int32_t>::load_aligned(a.outside) & simd::batch<std::int32_t>(1 << k));
-    if (!act) continue;
-    // u: +e1, -e1, +e2, -e2 with e2 = (-e1.y, e1.x) (Eq. 9's endpoint order).
-    const B vx = (k >> 1) ? -e1y : e1x, vy = (k >> 1) ? e1x : e1y;
-    const B ux = (k & 1) ? -vx : vx, uy = (k & 1) ? -vy : vy;
+  const simd::batch<std::int32_t> outside = simd::batch<std::int32_t>::load_aligned(a.outside);
+  for (int ax = 0; ax < 2; ++ax) {  // the endpoints m + L u and m - L u of one ellipse axis (Eq. 9)
+    const unsigned plus = lanes & simd::nonzero_lanes(outside & simd::batch<std::int32_t>(1 << (2 * ax)));
+    const unsigned minus = lanes & simd::nonzero_lanes(outside & simd::batch<std::int32_t>(2 << (2 * ax)));
+    if (!(plus | minus)) continue;
+    // u = e1, or e2 = (-e1.y, e1.x) (Eq. 9's endpoint order: +e1, -e1, +e2, -e2). w_d (Eq. 11)
+    // is even in u, so d*, the reach of the march and Eq. 13 are the same for u and -u.
+    const B ux = ax ? -e1y : e1x, uy = ax ? e1x : e1y;
     const std::array<B, 3> w = detail::axis_contributions(qx, qy, s, ux, uy);  // Eq. 11
     const auto c10 = w[1] > w[0], c21 = w[2] > w[1], c20 = w[2] > w[0];  // d* = argmax w_d (Eq. 11)
     const auto is2 = (c10 & c21) | (!c10 & c20), is1 = c10 & !c21;
     const B w_star = simd::select(is2, w[2], simd::select(is1, w[1], w[0]));
     const B c = simd::select(is2, beat[2], simd::select(is1, beat[1], beat[0]));
     const B w_sum = w[0] + w[1] + w[2];
-    const B lambda = lam[k >> 1], step = steps[k >> 1];
+    const B lambda = lam[ax], step = steps[ax];
     ux.store_aligned(ux_);
     uy.store_aligned(uy_);
     step.store_aligned(step_);
-    axis[k >> 1].store_aligned(L_);
+    axis[ax].store_aligned(L_);
     c.store_aligned(c_);
     detail::march_reach(c, lambda, w_star, w_sum, step, p).store_aligned(reach_);
     unsigned traced = 0;
-    for (unsigned m = act; m; m &= m - 1) {
+    for (unsigned m = plus | minus; m; m &= m - 1) {
       const int l = std::countr_zero(m);
+      lu_[l] = 0.f;
       if (!(c_[l] > p.f_min)) continue;  // the minimum is already f_min
-      const int last = detail::last_sample(reach_[l], samples);
-      if (last < 0) continue;
-      const int e = first_exit_sample(march, g.m(static_cast<std::size_t>(l)), Eigen::Vector2f(ux_[l], uy_[l]), step_[l], last);  // B.3
-      if (e > last && last < samples - 1) continue;  // no exit within reach
-      lu_[l] = e <= last ? exit_distance(e, step_[l]) : L_[l];
-      traced |= 1u << l;
+      int last = detail::last_sample(reach_[l], samples);
+      // Eq. 13's factor grows with l_u: the smaller l_u of the pair gives the pair's minimum, so
+      // the second march needs to reach only to just before the first one's exit.
+      for (int side = 0; side < 2 && last >= 0; ++side) {
+        if (!((((side ? minus : plus) >> l) & 1u))) continue;
+        const Eigen::Vector2f u = side ? Eigen::Vector2f(-ux_[l], -uy_[l]) : Eigen::Vector2f(ux_[l], uy_[l]);
+        const int e = first_exit_sample(march, g.m(static_cast<std::size_t>(l)), u, step_[l], last);  // B.3
+        if (e > last && last < samples - 1) continue;  // no exit within reach
+        const float lu = e <= last ? exit_distance(e, step_[l]) : L_[l];
+        lu_[l] = (traced >> l) & 1u ? std::min(lu_[l], lu) : lu;
+        traced |= 1u << l;
+        if (e <= last) last = e - 1;
+      }
     }
     if (!traced) continue;
     for (std::size_t l = 0; l < W; ++l) {
@@ -321,14 +334,16 @@ class BoundaryRefinement {
     slot_.resize(n);
     // Geometry columns padded to whole chunk boxes: abr_geometry reads simd::width slots at a time.
     const std::size_t padded = (n + kBox - 1) / kBox * kBox;
-    for (auto& c : mu_) c.assign(padded, 0.f);
-    for (auto& c : rot_) c.assign(padded, 0.f);
-    for (auto& c : s_) c.assign(padded, 0.f);
+    // The per-slot state is allocated unwritten (UninitVector) and filled by the parallel loop
+    // below, every slot once: no serial memset, and the pages fault in on every thread.
+    for (auto& c : mu_) c.resize(padded);
+    for (auto& c : rot_) c.resize(padded);
+    for (auto& c : s_) c.resize(padded);
     for (auto& c : log_s_) c.resize(n);
-    for (auto& c : f_) c.assign(n, std::numeric_limits<float>::infinity());
-    for (auto& c : arg_) c.assign(n, no_view);
-    n_vis_.assign(n, 0);
-    n_ovf_.assign(n, 0);
+    for (auto& c : f_) c.resize(n);
+    for (auto& c : arg_) c.resize(n);
+    n_vis_.resize(n);
+    n_ovf_.resize(n);
     for (std::size_t j = 0; j < n; ++j) slot_[order[j]] = static_cast<std::uint32_t>(j);  // slot j: candidate order[j]
     // In candidate order: the scene's columns are read in the candidates' (usually ascending)
     // order rather than gathered in Morton order, which misses the cache on every read.
@@ -339,11 +354,19 @@ class BoundaryRefinement {
         mu_[d][j] = scene.mean[d][i];
         log_s_[d][j] = scene.log_scale[d][i];
         s_[d][j] = std::exp(log_s_[d][j]);
+        f_[d][j] = std::numeric_limits<float>::infinity();
+        arg_[d][j] = no_view;
       }
+      n_vis_[j] = n_ovf_[j] = 0;
       const Eigen::Matrix3f R = rotation_from_quaternion(scene.rotation[0][i], scene.rotation[1][i],
                                                          scene.rotation[2][i], scene.rotation[3][i]);
       for (int e = 0; e < 9; ++e) rot_[e][j] = R(e % 3, e / 3);
     });
+    for (std::size_t j = n; j < padded; ++j) {  // the padding of the last chunk box
+      for (auto& c : mu_) c[j] = 0.f;
+      for (auto& c : rot_) c[j] = 0.f;
+      for (auto& c : s_) c[j] = 0.f;
+    }
     // Chunk boxes of the centres and the largest max_d s_d^2 per chunk (the bound of add_view).
     const std::size_t chunks = (n + kBox - 1) / kBox;
     box_.resize(chunks);
@@ -547,21 +570,25 @@ class BoundaryRefinement {
     AbrResult r;
     r.log_scale = {std::vector<float>(n), std::vector<float>(n), std::vector<float>(n)};
     r.axis_compressed.assign(n, 0);
-    for (std::size_t k = 0; k < n; ++k) {
+    std::vector<std::uint8_t> flagged(n, 0);  // per candidate: the counts below are sums of these
+    parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t kk) {
+      const auto k = static_cast<std::size_t>(kk);
       const std::size_t j = slot_[k];
       for (int d = 0; d < 3; ++d) r.log_scale[d][k] = log_s_[d][j];
-      if (n_vis_[j] == 0) continue;
+      if (n_vis_[j] == 0) return;
       const float gamma = static_cast<float>(n_ovf_[j]) / static_cast<float>(n_vis_[j]);  // B.3
-      if (!(gamma > params_.rho)) continue;
-      ++r.flagged;
+      if (!(gamma > params_.rho)) return;
+      flagged[k] = 1;
       for (int d = 0; d < 3; ++d) {
         const float f = std::min(1.f, std::max(params_.f_min, f_[d][j]));  // B.3 reconciliation
         if (!(f < 1.f)) continue;
         r.log_scale[d][k] += std::log(f);  // Eq. 14
         r.axis_compressed[k] |= static_cast<std::uint8_t>(1u << d);
       }
-      if (r.axis_compressed[k]) ++r.compressed;
-    }
+    });
+    r.flagged = static_cast<std::size_t>(std::count(flagged.begin(), flagged.end(), std::uint8_t{1}));
+    r.compressed = static_cast<std::size_t>(
+        std::count_if(r.axis_compressed.begin(), r.axis_compressed.end(), [](std::uint8_t c) { return c != 0; }));
     return r;
   }
 
@@ -819,15 +846,15 @@ class BoundaryRefinement {
   std::vector<Index> candidates_;
   std::vector<std::uint32_t> slot_;          // internal slot of candidate position k
   AbrParams params_;
-  std::array<std::vector<float>, 3> mu_;     // candidate means
-  std::array<std::vector<float>, 9> rot_;    // candidate rotation matrices, column-major
-  std::array<std::vector<float>, 3> s_;      // candidate scales exp(log s)
+  std::array<UninitVector<float>, 3> mu_;    // candidate means
+  std::array<UninitVector<float>, 9> rot_;   // candidate rotation matrices, column-major
+  std::array<UninitVector<float>, 3> s_;     // candidate scales exp(log s)
   std::vector<std::array<float, 7>> box_;    // per kBox slots: centre box lo, hi, max max_d s_d^2
   MaskTiles tiles_;                          // the current view's mask in tiles
   LogScales log_s_;                          // candidate log-scales before refinement (by slot)
-  std::array<std::vector<float>, 3> f_;      // running minimum candidate factor per axis
-  std::vector<std::uint16_t> n_vis_, n_ovf_;  // B.3 counts
-  std::array<std::vector<std::uint16_t>, 3> arg_;  // the view that set f_ (incremental updates)
+  std::array<UninitVector<float>, 3> f_;     // running minimum candidate factor per axis
+  UninitVector<std::uint16_t> n_vis_, n_ovf_;  // B.3 counts
+  std::array<UninitVector<std::uint16_t>, 3> arg_;  // the view that set f_ (incremental updates)
   std::vector<std::uint8_t> mode_;           // carried / fresh / stale, after carry
   std::size_t wanted_ = 0;                   // slots not carried clean
   bool completing_ = false;                  // complete_view has started
