@@ -38,7 +38,6 @@
 #include "vcar/algo/boundary_distance.hpp"
 #include "vcar/algo/mean_projection.hpp"
 #include "vcar/core/camera.hpp"
-#include "vcar/core/default_init_allocator.hpp"
 #include "vcar/core/error.hpp"
 #include "vcar/core/gaussian_scene.hpp"
 #include "vcar/core/image.hpp"
@@ -334,16 +333,14 @@ class BoundaryRefinement {
     slot_.resize(n);
     // Geometry columns padded to whole chunk boxes: abr_geometry reads simd::width slots at a time.
     const std::size_t padded = (n + kBox - 1) / kBox * kBox;
-    // The per-slot state is allocated unwritten (UninitVector) and filled by the parallel loop
-    // below, every slot once: no serial memset, and the pages fault in on every thread.
-    for (auto& c : mu_) c.resize(padded);
-    for (auto& c : rot_) c.resize(padded);
-    for (auto& c : s_) c.resize(padded);
+    for (auto& c : mu_) c.assign(padded, 0.f);
+    for (auto& c : rot_) c.assign(padded, 0.f);
+    for (auto& c : s_) c.assign(padded, 0.f);
     for (auto& c : log_s_) c.resize(n);
-    for (auto& c : f_) c.resize(n);
-    for (auto& c : arg_) c.resize(n);
-    n_vis_.resize(n);
-    n_ovf_.resize(n);
+    for (auto& c : f_) c.assign(n, std::numeric_limits<float>::infinity());
+    for (auto& c : arg_) c.assign(n, no_view);
+    n_vis_.assign(n, 0);
+    n_ovf_.assign(n, 0);
     for (std::size_t j = 0; j < n; ++j) slot_[order[j]] = static_cast<std::uint32_t>(j);  // slot j: candidate order[j]
     // In candidate order: the scene's columns are read in the candidates' (usually ascending)
     // order rather than gathered in Morton order, which misses the cache on every read.
@@ -354,19 +351,11 @@ class BoundaryRefinement {
         mu_[d][j] = scene.mean[d][i];
         log_s_[d][j] = scene.log_scale[d][i];
         s_[d][j] = std::exp(log_s_[d][j]);
-        f_[d][j] = std::numeric_limits<float>::infinity();
-        arg_[d][j] = no_view;
       }
-      n_vis_[j] = n_ovf_[j] = 0;
       const Eigen::Matrix3f R = rotation_from_quaternion(scene.rotation[0][i], scene.rotation[1][i],
                                                          scene.rotation[2][i], scene.rotation[3][i]);
       for (int e = 0; e < 9; ++e) rot_[e][j] = R(e % 3, e / 3);
     });
-    for (std::size_t j = n; j < padded; ++j) {  // the padding of the last chunk box
-      for (auto& c : mu_) c[j] = 0.f;
-      for (auto& c : rot_) c[j] = 0.f;
-      for (auto& c : s_) c[j] = 0.f;
-    }
     // Chunk boxes of the centres and the largest max_d s_d^2 per chunk (the bound of add_view).
     const std::size_t chunks = (n + kBox - 1) / kBox;
     box_.resize(chunks);
@@ -846,15 +835,15 @@ class BoundaryRefinement {
   std::vector<Index> candidates_;
   std::vector<std::uint32_t> slot_;          // internal slot of candidate position k
   AbrParams params_;
-  std::array<UninitVector<float>, 3> mu_;    // candidate means
-  std::array<UninitVector<float>, 9> rot_;   // candidate rotation matrices, column-major
-  std::array<UninitVector<float>, 3> s_;     // candidate scales exp(log s)
+  std::array<std::vector<float>, 3> mu_;     // candidate means
+  std::array<std::vector<float>, 9> rot_;    // candidate rotation matrices, column-major
+  std::array<std::vector<float>, 3> s_;      // candidate scales exp(log s)
   std::vector<std::array<float, 7>> box_;    // per kBox slots: centre box lo, hi, max max_d s_d^2
   MaskTiles tiles_;                          // the current view's mask in tiles
   LogScales log_s_;                          // candidate log-scales before refinement (by slot)
-  std::array<UninitVector<float>, 3> f_;     // running minimum candidate factor per axis
-  UninitVector<std::uint16_t> n_vis_, n_ovf_;  // B.3 counts
-  std::array<UninitVector<std::uint16_t>, 3> arg_;  // the view that set f_ (incremental updates)
+  std::array<std::vector<float>, 3> f_;      // running minimum candidate factor per axis
+  std::vector<std::uint16_t> n_vis_, n_ovf_;  // B.3 counts
+  std::array<std::vector<std::uint16_t>, 3> arg_;  // the view that set f_ (incremental updates)
   std::vector<std::uint8_t> mode_;           // carried / fresh / stale, after carry
   std::size_t wanted_ = 0;                   // slots not carried clean
   bool completing_ = false;                  // complete_view has started
