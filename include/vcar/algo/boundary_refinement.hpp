@@ -250,7 +250,6 @@ inline void trace_overflow(const MarchMask& march, const AbrBatch& g, unsigned l
     unsigned traced = 0;
     for (unsigned m = plus | minus; m; m &= m - 1) {
       const int l = std::countr_zero(m);
-      lu_[l] = 0.f;
       if (!(c_[l] > p.f_min)) continue;  // the minimum is already f_min
       int last = detail::last_sample(reach_[l], samples);
       // Eq. 13's factor grows with l_u: the smaller l_u of the pair gives the pair's minimum, so
@@ -304,11 +303,12 @@ inline AbrObservation observe_gaussian(const Camera& cam, const Mask& mask, cons
   AbrObservation obs;
   obs.eligible = true;
   AbrLanes a;
+  const std::int32_t outside = outside_endpoints(mask, g, 0);
+  if (!outside) return obs;
   for (std::size_t l = 0; l < L; ++l) {
-    a.outside[l] = outside_endpoints(mask, g, 0);
+    a.outside[l] = outside;
     for (int d = 0; d < 3; ++d) a.s[d][l] = s[d], a.beat[d][l] = std::numeric_limits<float>::infinity();
   }
-  if (!a.outside[0]) return obs;
   obs.overflow = true;
   trace_overflow(mask, g, 1u, p, a);
   for (int d = 0; d < 3; ++d) obs.f[d] = a.f[d][0];
@@ -713,7 +713,7 @@ class BoundaryRefinement {
         }
         // observe_gaussian, simd::width slots at a time (kBox is a whole number of batches).
         AbrBatch g;
-        AbrLanes a;
+        AbrLanes a{};  // lanes not traced keep finite values from earlier batches (masked out)
         alignas(64) std::int32_t centre[simd::width];
         for (std::size_t j = j0; j < j1; j += simd::width) {
           const std::size_t lanes = std::min(simd::width, j1 - j);
@@ -747,9 +747,6 @@ class BoundaryRefinement {
             for (int d = 0; d < 3; ++d) a.s[d][l] = s_[d][k], a.beat[d][l] = f_[d][k];
           }
           if (traced) {
-            for (std::size_t l = 0; l < simd::width; ++l)  // lanes not traced: any finite values
-              if (!((traced >> l) & 1u))
-                for (int d = 0; d < 3; ++d) a.s[d][l] = 0.f, a.beat[d][l] = 0.f;
             if (tiles) trace_overflow(tiles_, g, traced, p, a);
             else trace_overflow(mask, g, traced, p, a);
           }
