@@ -25,29 +25,31 @@ inline constexpr int max_degree = 3;
 inline constexpr int coeffs(int degree) { return (degree + 1) * (degree + 1); }
 }  // namespace sh
 
-// The (degree+1)^2 basis values at the unit direction (x, y, z), written to Y[0..coeffs).
-inline void sh_basis(int degree, float x, float y, float z, float* Y) {
+// The (degree+1)^2 basis values at the unit direction (x, y, z), written to Y[0..coeffs). T is
+// float, or a SIMD batch of floats with one direction per lane (the renderer's shading).
+template <class T>
+inline void sh_basis(int degree, T x, T y, T z, T* Y) {
   assert(degree >= 0 && degree <= sh::max_degree);
-  Y[0] = sh::C0;
+  Y[0] = T(sh::C0);
   if (degree < 1) return;
-  Y[1] = -sh::C1 * y;
-  Y[2] = sh::C1 * z;
-  Y[3] = -sh::C1 * x;
+  Y[1] = T(-sh::C1) * y;
+  Y[2] = T(sh::C1) * z;
+  Y[3] = T(-sh::C1) * x;
   if (degree < 2) return;
-  const float xx = x * x, yy = y * y, zz = z * z, xy = x * y, yz = y * z, xz = x * z;
-  Y[4] = sh::C2[0] * xy;
-  Y[5] = sh::C2[1] * yz;
-  Y[6] = sh::C2[2] * (2.f * zz - xx - yy);
-  Y[7] = sh::C2[3] * xz;
-  Y[8] = sh::C2[4] * (xx - yy);
+  const T xx = x * x, yy = y * y, zz = z * z, xy = x * y, yz = y * z, xz = x * z;
+  Y[4] = T(sh::C2[0]) * xy;
+  Y[5] = T(sh::C2[1]) * yz;
+  Y[6] = T(sh::C2[2]) * (T(2.f) * zz - xx - yy);
+  Y[7] = T(sh::C2[3]) * xz;
+  Y[8] = T(sh::C2[4]) * (xx - yy);
   if (degree < 3) return;
-  Y[9] = sh::C3[0] * y * (3.f * xx - yy);
-  Y[10] = sh::C3[1] * xy * z;
-  Y[11] = sh::C3[2] * y * (4.f * zz - xx - yy);
-  Y[12] = sh::C3[3] * z * (2.f * zz - 3.f * xx - 3.f * yy);
-  Y[13] = sh::C3[4] * x * (4.f * zz - xx - yy);
-  Y[14] = sh::C3[5] * z * (xx - yy);
-  Y[15] = sh::C3[6] * x * (xx - 3.f * yy);
+  Y[9] = T(sh::C3[0]) * y * (T(3.f) * xx - yy);
+  Y[10] = T(sh::C3[1]) * xy * z;
+  Y[11] = T(sh::C3[2]) * y * (T(4.f) * zz - xx - yy);
+  Y[12] = T(sh::C3[3]) * z * (T(2.f) * zz - T(3.f) * xx - T(3.f) * yy);
+  Y[13] = T(sh::C3[4]) * x * (T(4.f) * zz - xx - yy);
+  Y[14] = T(sh::C3[5]) * z * (xx - yy);
+  Y[15] = T(sh::C3[6]) * x * (xx - T(3.f) * yy);
 }
 
 namespace sh::detail {

@@ -139,7 +139,7 @@ inline void project_batch(const BatchCamera& c, const ProjectionParams& p, const
       continue;
     }
     out_splat[l] = {a[0][l], a[1][l], a[2][l], a[3][l], a[4][l], a[5][l], a[6][l], a[7][l], a[8][l], a[9][l],
-                    0.f, 0.f, 0.f, k0 + static_cast<std::uint32_t>(l), 0u};
+                    0.f, 0.f, 0.f, k0 + static_cast<std::uint32_t>(l)};
     out_rect[l] = pack_rect(static_cast<std::int32_t>(a[11][l]), static_cast<std::int32_t>(a[12][l]),
                             static_cast<std::int32_t>(a[13][l]), static_cast<std::int32_t>(a[14][l]));
   }

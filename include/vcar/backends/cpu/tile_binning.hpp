@@ -24,9 +24,8 @@ struct alignas(64) PackedSplat {
   float ca, cb, cc;      // conic: Sigma2D^-1 = [[ca, cb], [cb, cc]]
   float sigma_max;       // ln(255 opacity): alpha >= 1/255 iff sigma <= this
   float opacity, depth;  // sigmoid(o), camera-space z
-  float r, g, b;         // colour from SH, valid once `shaded` is 2 (filled on first use)
+  float r, g, b;         // colour from SH (batch_shading.hpp; 0 where the pass needs none)
   std::uint32_t k;       // index into the request's drawn list
-  std::uint32_t shaded;  // 0: no colour yet, 1: being computed, 2: r, g, b valid (atomic_ref)
 };
 static_assert(sizeof(PackedSplat) == 64, "one cache line per splat");
 

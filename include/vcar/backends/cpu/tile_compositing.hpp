@@ -3,7 +3,6 @@
 // alpha = min(0.999, opacity exp(-sigma)), skip alpha < 1/255, stop before the Gaussian whose
 // next transmittance T (1 - alpha) would be <= 1e-4 (gsplat does not composite that one).
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdint>
 
@@ -56,40 +55,14 @@ inline int clamp_ceil(float v, int hi) {
   return v >= static_cast<float>(hi) ? hi : static_cast<int>(std::max(std::ceil(v), -1.f));
 }
 
-// Colour of a splat, computed by colour(k, rgb) the first time a tile composites it (SH only
-// for splats that show). The value depends only on the Gaussian and the camera, so every tile
-// sees the same bits whichever thread computes it; a thread that loses the race keeps its copy.
-template <class ColourFn>
-inline void splat_colour(PackedSplat& s, ColourFn& colour, float rgb[3]) {
-  std::atomic_ref<std::uint32_t> state(s.shaded);
-  if (state.load(std::memory_order_acquire) == 2) {
-    rgb[0] = s.r, rgb[1] = s.g, rgb[2] = s.b;
-    return;
-  }
-  colour(s.k, rgb);
-  std::uint32_t idle = 0;
-  if (state.compare_exchange_strong(idle, 1, std::memory_order_acquire)) {
-    s.r = rgb[0], s.g = rgb[1], s.b = rgb[2];
-    state.store(2, std::memory_order_release);
-  }
-}
-
-// Colour functor for passes that need none (contributions only). A colour functor also has
-// prefetch(k): asks for the inputs of colour(k) a few splats ahead, so that their cache misses
-// overlap the compositing of the splats in between.
-struct NoColour {
-  void operator()(std::uint32_t, float* rgb) const { rgb[0] = rgb[1] = rgb[2] = 0.f; }
-  void prefetch(std::uint32_t) const {}
-};
-
 // Composites the splats ids[0..count) (front to back) into tile (x0, y0) of size
-// w_valid x h_valid. Colour: accumulate rgb (from splat_colour) and depth. Contrib: entry_w[e] /
+// w_valid x h_valid. Colour: accumulate rgb (the splat's r, g, b) and depth. Contrib: entry_w[e] /
 // entry_wfg[e] get sum alpha T and sum alpha T fg over the tile for entry e (entries never
 // reached stay as given).
-template <bool Colour, bool Contrib, class ColourFn = NoColour>
-void composite_tile(PackedSplat* splat, const std::uint32_t* ids, std::int64_t count, int x0, int y0,
+template <bool Colour, bool Contrib>
+void composite_tile(const PackedSplat* splat, const std::uint32_t* ids, std::int64_t count, int x0, int y0,
                     int w_valid, int h_valid, TileState& st, float* entry_w = nullptr,
-                    float* entry_wfg = nullptr, ColourFn colour = {}) {
+                    float* entry_wfg = nullptr) {
   constexpr int L = static_cast<int>(Lane::size);
   constexpr int NB = TileState::NB;
   // 1 at bit r * NB of every row r: times a row's batch bits, the same bits on every row.
@@ -102,18 +75,11 @@ void composite_tile(PackedSplat* splat, const std::uint32_t* ids, std::int64_t c
   for (int c = 0; c < tile_size; ++c) lane_x[c] = static_cast<float>(x0 + c) + 0.5f;
   const Lane zero(0.f), one(1.f), amax(alpha_max), askip(alpha_skip), tstop(T_stop);
 
-  // Splats are scattered in memory: each is fetched 2 * ahead entries before its turn, and the
-  // colour inputs of one not yet shaded `ahead` entries before.
-  constexpr std::int64_t ahead = 8;
+  // A tile's splats are scattered in memory: each is fetched `ahead` entries before its turn.
+  constexpr std::int64_t ahead = 16;
   for (std::int64_t e = 0; e < count; ++e) {
-    if (e + 2 * ahead < count) __builtin_prefetch(splat + ids[e + 2 * ahead]);
-    if constexpr (Colour) {
-      if (e + ahead < count) {
-        PackedSplat& a = splat[ids[e + ahead]];
-        if (std::atomic_ref<std::uint32_t>(a.shaded).load(std::memory_order_relaxed) == 0) colour.prefetch(a.k);
-      }
-    }
-    PackedSplat& s = splat[ids[e]];
+    if (e + ahead < count) __builtin_prefetch(splat + ids[e + ahead]);
+    const PackedSplat& s = splat[ids[e]];
     const float mx = s.mx, my = s.my, rx = s.rx, ry = s.ry;
     // Rows and columns of the tile inside the bounding box, widened by one pixel for rounding.
     const int r_lo = clamp_floor(my - ry - static_cast<float>(y0) - 1.f, 0);
@@ -131,8 +97,8 @@ void composite_tile(PackedSplat* splat, const std::uint32_t* ids, std::int64_t c
     const float sig_max = s.sigma_max + 1e-2f;  // slack for rounding: the lanes decide exactly
     const Lane half_ca(0.5f * ca), op(s.opacity), lane_sig_max(sig_max), lmx(mx), depth(s.depth);
     Lane sw = zero, swfg = zero;
-    bool stopped = false, have_rgb = false;
-    Lane cr = zero, cg = zero, cbl = zero;  // the splat's colour, broadcast once
+    bool stopped = false;
+    const Lane cr(s.r), cg(s.g), cbl(s.b);
     for (int r = r_lo; r <= r_hi; ++r) {
       if (!((st.live >> (r * NB)) & ((std::uint64_t{1} << NB) - 1))) continue;  // row done
       const float dy = my - (static_cast<float>(y0 + r) + 0.5f);
@@ -166,12 +132,6 @@ void composite_tile(PackedSplat* splat, const std::uint32_t* ids, std::int64_t c
           }
         }
         if constexpr (Colour) {
-          if (!have_rgb && simd::any(take)) {  // colour only for a splat that is composited
-            float rgb[3];
-            splat_colour(s, colour, rgb);
-            cr = Lane(rgb[0]), cg = Lane(rgb[1]), cbl = Lane(rgb[2]);
-            have_rgb = true;
-          }
           (Lane::load_aligned(st.cr + p) + w * cr).store_aligned(st.cr + p);
           (Lane::load_aligned(st.cg + p) + w * cg).store_aligned(st.cg + p);
           (Lane::load_aligned(st.cb + p) + w * cbl).store_aligned(st.cb + p);

@@ -1,6 +1,7 @@
 #pragma once
 // vcar::cpu::TiledRenderer: the CPU reference splatter, gsplat-equivalent (conventions §3).
-// Steps: project every drawn Gaussian (core/projection.hpp, B.6-B.7), cull, bin into 16 x 16
+// Steps: project every drawn Gaussian (core/projection.hpp, B.6-B.7), cull, shade the splats on
+// screen (SH colour, batch_shading.hpp; renders only), bin into 16 x 16
 // tiles in camera-depth order (ties by drawn index), composite each tile front to back,
 // multi-threaded over tiles and SIMD over the pixels of a tile. Results are bit-identical for
 // any thread count. One renderer serves one call at a time (it keeps scratch buffers).
@@ -14,13 +15,13 @@
 #include <Eigen/Core>
 
 #include "vcar/backends/cpu/batch_projection.hpp"
+#include "vcar/backends/cpu/batch_shading.hpp"
 #include "vcar/backends/cpu/tile_binning.hpp"
 #include "vcar/backends/cpu/tile_compositing.hpp"
 #include "vcar/concepts/renderer.hpp"
 #include "vcar/core/error.hpp"
 #include "vcar/core/parallel.hpp"
 #include "vcar/core/projection.hpp"
-#include "vcar/core/spherical_harmonics.hpp"
 
 namespace vcar::cpu {
 
@@ -46,9 +47,8 @@ public:
   RenderOutput render(const RenderRequest& q) {
     const Camera& cam = check(q);
     ThreadScope threads(opt_.num_threads);
-    prepare(q);
+    prepare(q, true);
     const int W = cam.width, H = cam.height;
-    const SHColour colour{&q, cam.position()};
     const auto t0 = Clock::now();
     RenderOutput out;
     out.rgb = ImageF(W, H, 3);
@@ -61,8 +61,7 @@ public:
       TileState st;
       st.reset(w, h);
       const std::int64_t b = bins_.start[t], e = bins_.start[t + 1];
-      composite_tile<true, false>(bins_.splat.data(), bins_.ids.data() + b, e - b, x0, y0, w, h, st,
-                                  nullptr, nullptr, colour);
+      composite_tile<true, false>(bins_.splat.data(), bins_.ids.data() + b, e - b, x0, y0, w, h, st);
       for (int r = 0; r < h; ++r)
         for (int c = 0; c < w; ++c) {
           const int p = r * tile_size + c;
@@ -91,7 +90,7 @@ public:
     if (acc.weight.size() != n || acc.weight_fg.size() != n)
       throw Error("contribution vectors must be sized like the scene", "Contributions");
     ThreadScope threads(opt_.num_threads);
-    prepare(q);
+    prepare(q, false);
     const int W = cam.width, H = cam.height;
     const auto t0 = Clock::now();
     entry_w_.assign(bins_.ids.size(), 0.f);
@@ -120,27 +119,6 @@ public:
 private:
   using Clock = std::chrono::steady_clock;
   static double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
-
-  // SH colour of drawn Gaussian k, evaluated lazily for the splats that get composited
-  // (splat_colour); prefetch(k) asks for its mean and coefficients ahead of time.
-  struct SHColour {
-    const RenderRequest* q;
-    Eigen::Vector3f eye;
-    void operator()(std::uint32_t k, float* rgb) const {
-      const GaussianScene& sc = *q->scene;
-      const std::size_t i = scene_index(*q, k), B3 = static_cast<std::size_t>(sc.sh_coeffs()) * 3;
-      const Eigen::Vector3f c = sh_to_rgb(sc.sh_degree, sc.sh.data() + i * B3, sc.mu(i) - eye);
-      rgb[0] = c[0], rgb[1] = c[1], rgb[2] = c[2];
-    }
-    void prefetch(std::uint32_t k) const {
-      const GaussianScene& sc = *q->scene;
-      const std::size_t i = scene_index(*q, k), B3 = static_cast<std::size_t>(sc.sh_coeffs()) * 3;
-      for (int d = 0; d < 3; ++d) __builtin_prefetch(sc.mean[d].data() + i);
-      const char* c = reinterpret_cast<const char*>(sc.sh.data() + i * B3);
-      for (std::size_t b = 0; b < B3 * sizeof(float); b += 64) __builtin_prefetch(c + b);
-      __builtin_prefetch(c + B3 * sizeof(float) - 1);  // the last line when unaligned
-    }
-  };
 
   // Sets the thread count for one call (restored afterwards); 0 leaves it as it is.
   struct ThreadScope {
@@ -201,21 +179,37 @@ private:
   }
 
   // Projects every drawn Gaussian (one result per index, any thread count), Lane::size at a
-  // time (batch_projection.hpp), and bins the tiles.
-  void prepare(const RenderRequest& q) {
+  // time (batch_projection.hpp), shades the splats on screen if `shade` (batch_shading.hpp), and
+  // bins the tiles.
+  void prepare(const RenderRequest& q, bool shade) {
     const GaussianScene& sc = *q.scene;
     const std::size_t n = q.subset ? q.subset->size() : sc.size();
     splats_.resize(n);
     ProjectedSplats& s = splats_;
     const ProjectionParams& pp = opt_.projection;
     const BatchCamera bc(*q.camera, pp);
+    const Eigen::Vector3f eye_v = q.camera->position();
+    const float eye[3] = {eye_v.x(), eye_v.y(), eye_v.z()};
     constexpr int L = static_cast<int>(Lane::size);
     const auto t0 = Clock::now();
     parallel_chunks(static_cast<std::int64_t>(n), 4096, [&](std::int64_t, std::int64_t b, std::int64_t e) {
       for (std::int64_t k0 = b; k0 < e; k0 += L) {
         const int lanes = static_cast<int>(std::min<std::int64_t>(L, e - k0));
         const GaussianBatch g = load_batch(q, static_cast<std::size_t>(k0), lanes);
-        project_batch(bc, pp, g, static_cast<std::uint32_t>(k0), lanes, s.splat.data() + k0, s.rect.data() + k0);
+        PackedSplat* out = s.splat.data() + k0;
+        project_batch(bc, pp, g, static_cast<std::uint32_t>(k0), lanes, out, s.rect.data() + k0);
+        if (!shade) continue;
+        std::uint32_t on = 0;  // lanes on screen
+        std::size_t idx[L];
+        for (int l = 0; l < lanes; ++l) {
+          if (!rect_empty(s.rect[k0 + l])) on |= std::uint32_t{1} << l;
+          idx[l] = scene_index(q, static_cast<std::size_t>(k0 + l));
+        }
+        if (on == 0) continue;
+        alignas(64) float c[3][L];
+        shade_batch(sc, idx, on, g.mu, eye, c);
+        for (int l = 0; l < lanes; ++l)
+          if ((on >> l) & 1u) out[l].r = c[0][l], out[l].g = c[1][l], out[l].b = c[2][l];
       }
     });
     const auto t1 = Clock::now();
