@@ -96,10 +96,11 @@ int tiled_only(std::size_t n, int W, int H, int reps, int threads) {
       const auto b = std::bit_cast<std::uint32_t>(x);
       for (int k = 0; k < 4; ++k) hash = (hash ^ ((b >> (8 * k)) & 0xffu)) * 1099511628211ull;
     }
-  std::vector<double> project, bin, composite;  // stage medians over the same calls
+  std::vector<double> project, shade, bin, composite;  // stage medians over the same calls
   const Timing t = median_ms(reps, [&] {
     r.render(q);
     project.push_back(r.last_times().project_ms);
+    shade.push_back(r.last_times().shade_ms);
     bin.push_back(r.last_times().bin_ms);
     composite.push_back(r.last_times().composite_ms);
   });
@@ -107,8 +108,8 @@ int tiled_only(std::size_t n, int W, int H, int reps, int threads) {
     std::sort(v.begin(), v.end());
     return v[v.size() / 2];
   };
-  std::printf("tiled %zu %dx%d threads %d: wall %.2f ms, cpu %.2f ms (project %.1f, bin %.1f, composite %.1f; "
-              "image hash %016llx)\n", n, W, H, threads, t.wall, t.cpu, median(project), median(bin), median(composite),
+  std::printf("tiled %zu %dx%d threads %d: wall %.2f ms, cpu %.2f ms (project %.1f, shade %.1f, bin %.1f, composite %.1f; "
+              "image hash %016llx)\n", n, W, H, threads, t.wall, t.cpu, median(project), median(shade), median(bin), median(composite),
               static_cast<unsigned long long>(hash));
   return 0;
 }
