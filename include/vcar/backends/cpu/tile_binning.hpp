@@ -63,6 +63,7 @@ struct TileBins {
   std::vector<std::uint64_t> record, record_tmp;  // scratch: depth bits << 32 | drawn index
   std::vector<std::uint64_t> rect;          // scratch: tile rectangles in depth order
   std::vector<std::int64_t> chunk_offset;   // scratch: per (chunk, tile) write cursor
+  std::vector<std::int32_t> corner;         // scratch: per chunk, tile-corner differences
   int tiles() const { return tiles_x * tiles_y; }
 };
 
@@ -134,17 +135,32 @@ inline void bin_tiles(const ProjectedSplats& s, int width, int height, TileBins&
   bins.chunk_offset.assign(static_cast<std::size_t>(C * T), 0);
   std::int64_t* off = bins.chunk_offset.data();
   const std::uint64_t* rect = bins.rect.data();
-  const int tiles_x = bins.tiles_x;
-  // Calls f(tile) for each tile of the packed rectangle r.
-  auto for_tiles = [tiles_x](std::uint64_t r, auto&& f) {
-    const int tx0 = static_cast<int>(r & 0xffff), tx1 = static_cast<int>((r >> 16) & 0xffff);
-    const int ty0 = static_cast<int>((r >> 32) & 0xffff), ty1 = static_cast<int>(r >> 48);
-    for (int ty = ty0; ty < ty1; ++ty)
-      for (int tx = tx0; tx < tx1; ++tx) f(ty * tiles_x + tx);
-  };
+  const int tiles_x = bins.tiles_x, tiles_y = bins.tiles_y;
+  // Per-chunk tile counts from a difference grid: +1 at the rectangle's corners (tx0, ty0) and
+  // (tx1, ty1), -1 at the other two, then a 2D prefix sum. Four increments per splat, whatever
+  // its size (a loop over its tiles mispredicts its exits).
+  const int DX = tiles_x + 1;
+  const std::int64_t D = static_cast<std::int64_t>(DX) * (tiles_y + 1);
+  bins.corner.assign(static_cast<std::size_t>(C * D), 0);
   parallel_chunks(n, chunk, [&](std::int64_t c, std::int64_t b, std::int64_t e) {
+    std::int32_t* d = bins.corner.data() + c * D;
+    for (std::int64_t j = b; j < e; ++j) {
+      const std::uint64_t r = rect[j];
+      const int tx0 = static_cast<int>(r & 0xffff), tx1 = static_cast<int>((r >> 16) & 0xffff);
+      const int ty0 = static_cast<int>((r >> 32) & 0xffff), ty1 = static_cast<int>(r >> 48);
+      ++d[ty0 * DX + tx0];
+      --d[ty0 * DX + tx1];
+      --d[ty1 * DX + tx0];
+      ++d[ty1 * DX + tx1];
+    }
     std::int64_t* cnt = off + c * T;
-    for (std::int64_t j = b; j < e; ++j) for_tiles(rect[j], [&](int t) { ++cnt[t]; });
+    for (int ty = 0; ty < tiles_y; ++ty) {
+      std::int32_t row = 0;  // running sum of this row's differences
+      for (int tx = 0; tx < tiles_x; ++tx) {
+        row += d[ty * DX + tx];
+        cnt[ty * tiles_x + tx] = row + (ty > 0 ? cnt[(ty - 1) * tiles_x + tx] : 0);
+      }
+    }
   });
   bins.start.assign(static_cast<std::size_t>(T + 1), 0);
   std::int64_t run = 0;
@@ -161,8 +177,18 @@ inline void bin_tiles(const ProjectedSplats& s, int width, int height, TileBins&
   std::uint32_t* ids = bins.ids.data();
   parallel_chunks(n, chunk, [&](std::int64_t c, std::int64_t b, std::int64_t e) {
     std::int64_t* cur = off + c * T;
-    for (std::int64_t j = b; j < e; ++j)
-      for_tiles(rect[j], [&](int t) { ids[cur[t]++] = static_cast<std::uint32_t>(j); });
+    for (std::int64_t j = b; j < e; ++j) {
+      // One loop over the rectangle's tiles (one exit to mispredict, not one per row).
+      const std::uint64_t r = rect[j];
+      const int tx0 = static_cast<int>(r & 0xffff), w = static_cast<int>((r >> 16) & 0xffff) - tx0;
+      const int ty0 = static_cast<int>((r >> 32) & 0xffff), h = static_cast<int>(r >> 48) - ty0;
+      int t = ty0 * tiles_x + tx0, col = 0;
+      for (int k = w * h; k > 0; --k) {
+        ids[cur[t]++] = static_cast<std::uint32_t>(j);
+        if (++col == w) col = 0, t += tiles_x - w + 1;
+        else ++t;
+      }
+    }
   });
 }
 
