@@ -13,7 +13,7 @@
 namespace {
 
 // n splats over several of sort_by_depth's 2^16-splat blocks: a quarter culled (empty
-// rectangle), depths from a few values (many ties) or spread over [0.01, 100].
+// rectangle), 1-3 x 1-3 tiles, depths from a few values (many ties) or spread over [0.01, 100].
 vcar::cpu::ProjectedSplats random_splats(std::size_t n, unsigned seed, bool ties) {
   std::mt19937 rng(seed);
   std::uniform_int_distribution<int> tile(0, 8), level(0, 6);  // rectangles inside 10 x 10 tiles
@@ -24,7 +24,8 @@ vcar::cpu::ProjectedSplats random_splats(std::size_t n, unsigned seed, bool ties
     s.splat[k] = {};
     s.splat[k].depth = ties ? 0.5f + static_cast<float>(level(rng)) : 0.01f * std::pow(1e4f, U(rng));
     const int tx = tile(rng), ty = tile(rng);
-    s.rect[k] = U(rng) < 0.25f ? 0 : vcar::cpu::pack_rect(tx, tx + 1 + tile(rng) % 2, ty, ty + 1);
+    const int w = std::min(1 + tile(rng) % 3, 10 - tx), h = std::min(1 + tile(rng) % 3, 10 - ty);
+    s.rect[k] = U(rng) < 0.25f ? 0 : vcar::cpu::pack_rect(tx, tx + w, ty, ty + h);
   }
   return s;
 }
@@ -47,13 +48,23 @@ TEST_CASE("tile binning: depth order is the stable sort by depth, for any thread
       vcar::cpu::TileBins bins;
       vcar::cpu::bin_tiles(s, 160, 160, bins);
       CHECK(bins.order == expected);
-      // Each tile's list is the depth ranks touching it, ascending (front to back).
-      std::size_t entries = 0;
+      // Each tile's list holds drawn indices whose rectangle contains the tile, in ascending depth
+      // rank (front to back).
+      std::vector<std::uint32_t> rank(s.size(), 0);
+      for (std::size_t j = 0; j < expected.size(); ++j) rank[expected[j]] = static_cast<std::uint32_t>(j);
+      std::size_t entries = 0, outside = 0, unordered = 0;
       for (int t = 0; t < bins.tiles(); ++t) {
-        const auto b = bins.ids.begin() + bins.start[t], e = bins.ids.begin() + bins.start[t + 1];
-        CHECK(std::is_sorted(b, e));
-        entries += static_cast<std::size_t>(e - b);
+        const int tx = t % bins.tiles_x, ty = t / bins.tiles_x;
+        for (std::int64_t e = bins.start[t]; e < bins.start[t + 1]; ++e) {
+          const std::uint32_t k = bins.ids[e];
+          const std::uint64_t r = s.rect[k];
+          outside += !(tx >= int(r & 0xffff) && tx < int(r >> 16 & 0xffff) && ty >= int(r >> 32 & 0xffff) && ty < int(r >> 48));
+          unordered += e > bins.start[t] && rank[bins.ids[e - 1]] >= rank[k];
+        }
+        entries += static_cast<std::size_t>(bins.start[t + 1] - bins.start[t]);
       }
+      CHECK(outside == 0);
+      CHECK(unordered == 0);
       std::size_t touched = 0;
       for (std::uint32_t k : expected) {
         const std::uint64_t r = s.rect[k];

@@ -51,12 +51,11 @@ inline bool rect_empty(std::uint64_t r) {
   return (r & 0xffff) >= ((r >> 16) & 0xffff) || ((r >> 32) & 0xffff) >= (r >> 48);
 }
 
-// Tile lists as one flat array: ids[start[t] .. start[t+1]) are depth ranks j (splat[j] is the
-// packed splat, order[j] its drawn index k) touching tile t, front to back; equal depths keep
-// increasing k (deterministic).
+// Tile lists as one flat array: ids[start[t] .. start[t+1]) are the drawn indices k of the
+// splats touching tile t (ProjectedSplats::splat[k]), front to back; equal depths keep increasing
+// k (deterministic).
 struct TileBins {
   int tiles_x = 0, tiles_y = 0;
-  std::vector<PackedSplat> splat;           // splats that touch a tile, in depth order
   std::vector<std::uint32_t> ids;
   std::vector<std::int64_t> start;          // tiles + 1 offsets
   std::vector<std::uint32_t> order;         // splats that touch a tile, by depth
@@ -101,23 +100,21 @@ inline void sort_by_depth(const ProjectedSplats& s, TileBins& bins) {
         *out++ = static_cast<std::uint64_t>(std::bit_cast<std::uint32_t>(s.splat[k].depth)) << 32 | static_cast<std::uint64_t>(k);
   });
   sort_by_upper_word(bins.record, bins.record_tmp, largest.empty() ? 0u : *std::max_element(largest.begin(), largest.end()));
-  // The splats and rectangles in depth order, so later passes read memory in sequence (a
-  // tile's list then climbs through memory).
+  // The rectangles in depth order, for the counting and scatter passes. (The packed splats stay
+  // where they are: gathering them in depth order, 64 bytes each, cost more than it saved the
+  // compositing, which reads only the splats in front of saturated pixels.) Each rectangle is
+  // asked for `ahead` records before its turn.
   bins.order.resize(m);
   bins.rect.resize(m);
-  bins.splat.resize(m);
-  // (a gather from scattered lines: each is asked for `ahead` records before its turn)
   constexpr std::int64_t ahead = 16;
   parallel_chunks(static_cast<std::int64_t>(m), 4096, [&](std::int64_t, std::int64_t b, std::int64_t e) {
     for (std::int64_t j = b; j < e; ++j) {
       if (j + ahead < e) {
         const auto a = static_cast<std::uint32_t>(bins.record[j + ahead]);
-        __builtin_prefetch(&s.splat[a]);
         __builtin_prefetch(&s.rect[a]);
       }
       const auto k = static_cast<std::uint32_t>(bins.record[j]);
       bins.order[j] = k;
-      bins.splat[j] = s.splat[k];
       bins.rect[j] = s.rect[k];
     }
   });
@@ -184,7 +181,7 @@ inline void bin_tiles(const ProjectedSplats& s, int width, int height, TileBins&
       const int ty0 = static_cast<int>((r >> 32) & 0xffff), h = static_cast<int>(r >> 48) - ty0;
       int t = ty0 * tiles_x + tx0, col = 0;
       for (int k = w * h; k > 0; --k) {
-        ids[cur[t]++] = static_cast<std::uint32_t>(j);
+        ids[cur[t]++] = bins.order[j];
         if (++col == w) col = 0, t += tiles_x - w + 1;
         else ++t;
       }

@@ -61,7 +61,7 @@ public:
       TileState st;
       st.reset(w, h);
       const std::int64_t b = bins_.start[t], e = bins_.start[t + 1];
-      composite_tile<true, false>(bins_.splat.data(), bins_.ids.data() + b, e - b, x0, y0, w, h, st);
+      composite_tile<true, false>(splats_.splat.data(), bins_.ids.data() + b, e - b, x0, y0, w, h, st);
       for (int r = 0; r < h; ++r)
         for (int c = 0; c < w; ++c) {
           const int p = r * tile_size + c;
@@ -104,12 +104,12 @@ public:
         for (int c = 0; c < w; ++c)
           st.fg[r * tile_size + c] = mask.data[static_cast<std::size_t>(y0 + r) * W + (x0 + c)] != 0 ? 1.f : 0.f;
       const std::int64_t b = bins_.start[t], e = bins_.start[t + 1];
-      composite_tile<false, true>(bins_.splat.data(), bins_.ids.data() + b, e - b, x0, y0, w, h, st,
+      composite_tile<false, true>(splats_.splat.data(), bins_.ids.data() + b, e - b, x0, y0, w, h, st,
                                   entry_w_.data() + b, entry_wfg_.data() + b);
     });
     // Reduced in tile order, one thread: the sums do not depend on the thread count.
     for (std::size_t e = 0; e < bins_.ids.size(); ++e) {
-      const std::size_t i = scene_index(q, bins_.order[bins_.ids[e]]);
+      const std::size_t i = scene_index(q, bins_.ids[e]);
       acc.weight[i] += entry_w_[e];
       acc.weight_fg[i] += entry_wfg_[e];
     }
