@@ -22,7 +22,7 @@ vcar::cpu::ProjectedSplats random_splats(std::size_t n, unsigned seed, bool ties
   s.resize(n);
   for (std::size_t k = 0; k < n; ++k) {
     s.splat[k] = {};
-    s.splat[k].depth = ties ? 0.5f + static_cast<float>(level(rng)) : 0.01f * std::pow(1e4f, U(rng));
+    s.splat[k].depth = s.depth[k] = ties ? 0.5f + static_cast<float>(level(rng)) : 0.01f * std::pow(1e4f, U(rng));
     const int tx = tile(rng), ty = tile(rng);
     const int w = std::min(1 + tile(rng) % 3, 10 - tx), h = std::min(1 + tile(rng) % 3, 10 - ty);
     s.rect[k] = U(rng) < 0.25f ? 0 : vcar::cpu::pack_rect(tx, tx + w, ty, ty + h);

@@ -34,10 +34,12 @@ static_assert(sizeof(PackedSplat) == 64, "one cache line per splat");
 struct ProjectedSplats {
   std::vector<PackedSplat> splat;
   std::vector<std::uint64_t> rect;  // touched tiles [tx0, tx1) x [ty0, ty1), 16 bits each (pack_rect)
+  std::vector<float> depth;         // splat[k].depth again, packed: the depth sort reads only these
 
   void resize(std::size_t n) {
     splat.resize(n);
     rect.resize(n);
+    depth.resize(n);
   }
   std::size_t size() const { return splat.size(); }
 };
@@ -85,7 +87,7 @@ inline void sort_by_depth(const ProjectedSplats& s, TileBins& bins) {
     for (std::int64_t k = b * block, e = std::min(n, k + block); k < e; ++k)
       if (!rect_empty(s.rect[k])) {
         ++kept;
-        top = std::max(top, std::bit_cast<std::uint32_t>(s.splat[k].depth));
+        top = std::max(top, std::bit_cast<std::uint32_t>(s.depth[k]));
       }
     at[b + 1] = kept;
     largest[b] = top;
@@ -97,7 +99,7 @@ inline void sort_by_depth(const ProjectedSplats& s, TileBins& bins) {
     std::uint64_t* out = bins.record.data() + at[b];
     for (std::int64_t k = b * block, e = std::min(n, k + block); k < e; ++k)
       if (!rect_empty(s.rect[k]))
-        *out++ = static_cast<std::uint64_t>(std::bit_cast<std::uint32_t>(s.splat[k].depth)) << 32 | static_cast<std::uint64_t>(k);
+        *out++ = static_cast<std::uint64_t>(std::bit_cast<std::uint32_t>(s.depth[k])) << 32 | static_cast<std::uint64_t>(k);
   });
   sort_by_upper_word(bins.record, bins.record_tmp, largest.empty() ? 0u : *std::max_element(largest.begin(), largest.end()));
   // The rectangles in depth order, for the counting and scatter passes. (The packed splats stay

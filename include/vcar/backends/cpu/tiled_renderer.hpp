@@ -195,6 +195,7 @@ private:
         const int lanes = static_cast<int>(std::min<std::int64_t>(L, e - k0));
         const GaussianBatch g = load_batch(q, static_cast<std::size_t>(k0), lanes);
         project_batch(bc, pp, g, static_cast<std::uint32_t>(k0), lanes, s.splat.data() + k0, s.rect.data() + k0);
+        for (int l = 0; l < lanes; ++l) s.depth[k0 + l] = s.splat[k0 + l].depth;
       }
     });
     times_.project_ms = ms_since(t0);
