@@ -65,6 +65,7 @@ struct TileBins {
   std::vector<std::uint64_t> rect;          // scratch: tile rectangles in depth order
   std::vector<std::int64_t> chunk_offset;   // scratch: per (chunk, tile) write cursor
   std::vector<std::int32_t> corner;         // scratch: per chunk, tile-corner differences
+  std::vector<std::int32_t> open;           // scratch: summed-area table of the tiles not skipped
   int tiles() const { return tiles_x * tiles_y; }
 };
 
@@ -122,24 +123,37 @@ inline void sort_by_depth(const ProjectedSplats& s, TileBins& bins) {
   });
 }
 
-// Bins the splats into tiles in depth order: per-chunk counts, prefix sum in (tile, chunk)
-// order, scatter; each tile's list is then already front to back (gsplat's (tile, depth) sort).
-inline void bin_tiles(const ProjectedSplats& s, int width, int height, TileBins& bins) {
-  bins.tiles_x = (width + tile_size - 1) / tile_size;
-  bins.tiles_y = (height + tile_size - 1) / tile_size;
-  sort_by_depth(s, bins);
-  const std::int64_t T = bins.tiles(), n = static_cast<std::int64_t>(bins.order.size());
+// Bins the splats of depth ranks [j0, j1) (sort_by_depth first) into the tiles t with
+// !skip[t] (skip may be null: every tile): per-chunk counts, prefix sum in (tile, chunk) order,
+// scatter; each tile's list is then front to back (gsplat's (tile, depth) sort). The renderer
+// bins in waves of depth ranks and skips the tiles whose pixels have all saturated.
+inline void bin_ranks(TileBins& bins, std::int64_t j0, std::int64_t j1, const std::uint8_t* skip = nullptr) {
+  const std::int64_t T = bins.tiles(), n = j1 - j0;
   const std::int64_t chunk = std::max<std::int64_t>(1, (n + binning_chunks - 1) / binning_chunks);
   const std::int64_t C = n == 0 ? 0 : (n + chunk - 1) / chunk;
   bins.chunk_offset.assign(static_cast<std::size_t>(C * T), 0);
   std::int64_t* off = bins.chunk_offset.data();
-  const std::uint64_t* rect = bins.rect.data();
+  const std::uint64_t* rect = bins.rect.data() + j0;
+  const std::uint32_t* order = bins.order.data() + j0;
   const int tiles_x = bins.tiles_x, tiles_y = bins.tiles_y;
   // Per-chunk tile counts from a difference grid: +1 at the rectangle's corners (tx0, ty0) and
   // (tx1, ty1), -1 at the other two, then a 2D prefix sum. Four increments per splat, whatever
   // its size (a loop over its tiles mispredicts its exits).
   const int DX = tiles_x + 1;
   const std::int64_t D = static_cast<std::int64_t>(DX) * (tiles_y + 1);
+  // With skipped tiles: open[(ty) * DX + tx] = open tiles in [0, tx) x [0, ty) (a summed-area
+  // table), so a splat whose rectangle holds no open tile is passed over in O(1).
+  if (skip) {
+    bins.open.assign(static_cast<std::size_t>(D), 0);
+    for (int ty = 0; ty < tiles_y; ++ty)
+      for (int tx = 0; tx < tiles_x; ++tx)
+        bins.open[(ty + 1) * DX + tx + 1] = bins.open[ty * DX + tx + 1] + bins.open[(ty + 1) * DX + tx] -
+                                            bins.open[ty * DX + tx] + (skip[ty * tiles_x + tx] ? 0 : 1);
+  }
+  const std::int32_t* open = bins.open.data();
+  auto none_open = [&](int tx0, int tx1, int ty0, int ty1) {
+    return skip && open[ty1 * DX + tx1] - open[ty0 * DX + tx1] - open[ty1 * DX + tx0] + open[ty0 * DX + tx0] == 0;
+  };
   bins.corner.assign(static_cast<std::size_t>(C * D), 0);
   parallel_chunks(n, chunk, [&](std::int64_t c, std::int64_t b, std::int64_t e) {
     std::int32_t* d = bins.corner.data() + c * D;
@@ -147,6 +161,7 @@ inline void bin_tiles(const ProjectedSplats& s, int width, int height, TileBins&
       const std::uint64_t r = rect[j];
       const int tx0 = static_cast<int>(r & 0xffff), tx1 = static_cast<int>((r >> 16) & 0xffff);
       const int ty0 = static_cast<int>((r >> 32) & 0xffff), ty1 = static_cast<int>(r >> 48);
+      if (none_open(tx0, tx1, ty0, ty1)) continue;
       ++d[ty0 * DX + tx0];
       --d[ty0 * DX + tx1];
       --d[ty1 * DX + tx0];
@@ -160,6 +175,9 @@ inline void bin_tiles(const ProjectedSplats& s, int width, int height, TileBins&
         cnt[ty * tiles_x + tx] = row + (ty > 0 ? cnt[(ty - 1) * tiles_x + tx] : 0);
       }
     }
+    if (skip)
+      for (std::int64_t t = 0; t < T; ++t)
+        if (skip[t]) cnt[t] = 0;
   });
   bins.start.assign(static_cast<std::size_t>(T + 1), 0);
   std::int64_t run = 0;
@@ -181,14 +199,23 @@ inline void bin_tiles(const ProjectedSplats& s, int width, int height, TileBins&
       const std::uint64_t r = rect[j];
       const int tx0 = static_cast<int>(r & 0xffff), w = static_cast<int>((r >> 16) & 0xffff) - tx0;
       const int ty0 = static_cast<int>((r >> 32) & 0xffff), h = static_cast<int>(r >> 48) - ty0;
+      if (none_open(tx0, tx0 + w, ty0, ty0 + h)) continue;
       int t = ty0 * tiles_x + tx0, col = 0;
       for (int k = w * h; k > 0; --k) {
-        ids[cur[t]++] = bins.order[j];
+        if (!skip || !skip[t]) ids[cur[t]++] = order[j];
         if (++col == w) col = 0, t += tiles_x - w + 1;
         else ++t;
       }
     }
   });
+}
+
+// All splats into all tiles: sort_by_depth, then bin_ranks over every rank.
+inline void bin_tiles(const ProjectedSplats& s, int width, int height, TileBins& bins) {
+  bins.tiles_x = (width + tile_size - 1) / tile_size;
+  bins.tiles_y = (height + tile_size - 1) / tile_size;
+  sort_by_depth(s, bins);
+  bin_ranks(bins, 0, static_cast<std::int64_t>(bins.order.size()));
 }
 
 // Tiles touched by a bounding box [m - r, m + r] (clamped to the image's tiles, end exclusive).

@@ -40,6 +40,10 @@ struct TileState {
       active[p] = (r < h_valid && c < w_valid) ? 1.f : 0.f;
       cr[p] = cg[p] = cb[p] = D[p] = fg[p] = 0.f;
     }
+    update_live();
+  }
+  // `live` from `active` (after reset, or after active was loaded back).
+  void update_live() {
     live = 0;
     for (int p = 0; p < P; p += static_cast<int>(Lane::size))
       if (simd::any(Lane::load_aligned(active + p) > Lane(0.f))) live |= std::uint64_t{1} << (p / static_cast<int>(Lane::size));

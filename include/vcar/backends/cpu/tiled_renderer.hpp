@@ -44,36 +44,61 @@ public:
   const TiledRendererTimes& last_times() const { return times_; }
 
   // Renders rgb (bg * T_final behind), alpha = 1 - T_final and, if asked, depth = sum z alpha T.
+  //
+  // Tiles composite their splats in waves of depth ranks (the front 1/8, the next 1/8, 1/4,
+  // 1/2, ...), and each wave bins its splats only into the tiles that still have a pixel to
+  // composite: in a deep scene most splats lie behind saturated pixels and are never binned.
+  // Between waves a tile's state waits in the output images. The image is the same, bit for
+  // bit, as with one wave. When after a wave fewer than 1/20 of the tiles have saturated, the
+  // next wave takes every splat left (a shallow scene pays for at most one wait).
   RenderOutput render(const RenderRequest& q) {
     const Camera& cam = check(q);
     ThreadScope threads(opt_.num_threads);
-    prepare(q, true);
+    prepare(q, true, false);
     const int W = cam.width, H = cam.height;
-    const auto t0 = Clock::now();
     RenderOutput out;
     out.rgb = ImageF(W, H, 3);
     out.alpha = ImageF(W, H, 1);
     if (q.want_depth) out.depth = ImageF(W, H, 1);
+    const std::int64_t tiles = bins_.tiles(), m = static_cast<std::int64_t>(bins_.order.size());
+    done_.assign(static_cast<std::size_t>(tiles), 0);
+    active_.resize(static_cast<std::size_t>(tiles) * active_words);
+    times_.composite_ms = 0;
+    std::int64_t saturated = 0;
     const Eigen::Vector3f bg = q.background;
-    parallel_for_dynamic(bins_.tiles(), [&](std::int64_t t) {
-      int x0, y0, w, h;
-      tile_extent(t, W, H, x0, y0, w, h);
-      TileState st;
-      st.reset(w, h);
-      const std::int64_t b = bins_.start[t], e = bins_.start[t + 1];
-      composite_tile<true, false>(splats_.splat.data(), bins_.ids.data() + b, e - b, x0, y0, w, h, st);
-      for (int r = 0; r < h; ++r)
-        for (int c = 0; c < w; ++c) {
-          const int p = r * tile_size + c;
-          const std::size_t o = static_cast<std::size_t>(y0 + r) * W + (x0 + c);
-          out.rgb.data[o * 3 + 0] = st.cr[p] + bg[0] * st.T[p];
-          out.rgb.data[o * 3 + 1] = st.cg[p] + bg[1] * st.T[p];
-          out.rgb.data[o * 3 + 2] = st.cb[p] + bg[2] * st.T[p];
-          out.alpha.data[o] = 1.f - st.T[p];
-          if (q.want_depth) out.depth.data[o] = st.D[p];
-        }
-    });
-    times_.composite_ms = ms_since(t0);
+    for (std::int64_t j0 = 0, wave = 0, size = std::max<std::int64_t>(1, m / 8); wave == 0 || j0 < m; ++wave) {
+      const std::int64_t j1 = saturated * 20 < tiles && wave > 0 ? m : std::min(m, j0 + size);
+      const auto tb = Clock::now();
+      bin_ranks(bins_, j0, j1, wave == 0 ? nullptr : done_.data());
+      times_.bin_ms += ms_since(tb);
+      const auto tc = Clock::now();
+      finished_.assign(static_cast<std::size_t>(tiles), 0);
+      parallel_for_dynamic(tiles, [&](std::int64_t t) {
+        if (done_[t]) return;
+        int x0, y0, w, h;
+        tile_extent(t, W, H, x0, y0, w, h);
+        TileState st;
+        if (wave == 0)
+          st.reset(w, h);
+        else
+          load_tile(out, t, x0, y0, w, h, st);
+        const std::int64_t b = bins_.start[t], e = bins_.start[t + 1];
+        composite_tile<true, false>(splats_.splat.data(), bins_.ids.data() + b, e - b, x0, y0, w, h, st);
+        finished_[t] = st.all_done();
+        if (finished_[t] || j1 == m)
+          finish_tile(st, x0, y0, w, h, bg, out);
+        else
+          save_tile(st, t, x0, y0, w, h, out);
+      });
+      for (std::int64_t t = 0; t < tiles; ++t) {
+        saturated += finished_[t];
+        done_[t] |= finished_[t];
+      }
+      times_.composite_ms += ms_since(tc);
+      if (saturated == tiles) break;
+      j0 = j1;
+      size *= 2;
+    }
     return out;
   }
 
@@ -90,7 +115,7 @@ public:
     if (acc.weight.size() != n || acc.weight_fg.size() != n)
       throw Error("contribution vectors must be sized like the scene", "Contributions");
     ThreadScope threads(opt_.num_threads);
-    prepare(q, false);
+    prepare(q, false, true);
     const int W = cam.width, H = cam.height;
     const auto t0 = Clock::now();
     entry_w_.assign(bins_.ids.size(), 0.f);
@@ -179,9 +204,9 @@ private:
   }
 
   // Projects every drawn Gaussian (one result per index, any thread count), Lane::size at a
-  // time (batch_projection.hpp), shades the splats on screen if `shade` (batch_shading.hpp), and
-  // bins the tiles.
-  void prepare(const RenderRequest& q, bool shade) {
+  // time (batch_projection.hpp), shades the splats on screen if `shade` (batch_shading.hpp),
+  // sorts them by depth and, if `bin_all`, bins all of them.
+  void prepare(const RenderRequest& q, bool shade, bool bin_all) {
     const GaussianScene& sc = *q.scene;
     const std::size_t n = q.subset ? q.subset->size() : sc.size();
     splats_.resize(n);
@@ -203,7 +228,10 @@ private:
     if (shade) shade_splats(q);
     times_.shade_ms = ms_since(ts);
     const auto t1 = Clock::now();
-    bin_tiles(splats_, q.camera->width, q.camera->height, bins_);
+    bins_.tiles_x = (q.camera->width + tile_size - 1) / tile_size;
+    bins_.tiles_y = (q.camera->height + tile_size - 1) / tile_size;
+    sort_by_depth(splats_, bins_);
+    if (bin_all) bin_ranks(bins_, 0, static_cast<std::int64_t>(bins_.order.size()));
     times_.bin_ms = ms_since(t1);
   }
 
@@ -237,10 +265,64 @@ private:
     });
   }
 
+  // A tile's pixels as rendered: rgb with bg * T behind, alpha = 1 - T, depth sums.
+  static void finish_tile(const TileState& st, int x0, int y0, int w, int h, const Eigen::Vector3f& bg, RenderOutput& out) {
+    const int W = out.alpha.width;
+    for (int r = 0; r < h; ++r)
+      for (int c = 0; c < w; ++c) {
+        const int p = r * tile_size + c;
+        const std::size_t o = static_cast<std::size_t>(y0 + r) * W + (x0 + c);
+        out.rgb.data[o * 3 + 0] = st.cr[p] + bg[0] * st.T[p];
+        out.rgb.data[o * 3 + 1] = st.cg[p] + bg[1] * st.T[p];
+        out.rgb.data[o * 3 + 2] = st.cb[p] + bg[2] * st.T[p];
+        out.alpha.data[o] = 1.f - st.T[p];
+        if (!out.depth.data.empty()) out.depth.data[o] = st.D[p];
+      }
+  }
+
+  // A tile's state between waves: colour sums in out.rgb, T in out.alpha, depth sums in
+  // out.depth (when asked for), active pixels as bits in active_.
+  static constexpr int active_words = TileState::P / 64;
+  void save_tile(const TileState& st, std::int64_t t, int x0, int y0, int w, int h, RenderOutput& out) {
+    const int W = out.alpha.width;
+    std::uint64_t* bits = active_.data() + t * active_words;
+    for (int i = 0; i < active_words; ++i) bits[i] = 0;
+    for (int r = 0; r < h; ++r)
+      for (int c = 0; c < w; ++c) {
+        const int p = r * tile_size + c;
+        const std::size_t o = static_cast<std::size_t>(y0 + r) * W + (x0 + c);
+        out.rgb.data[o * 3 + 0] = st.cr[p];
+        out.rgb.data[o * 3 + 1] = st.cg[p];
+        out.rgb.data[o * 3 + 2] = st.cb[p];
+        out.alpha.data[o] = st.T[p];
+        if (!out.depth.data.empty()) out.depth.data[o] = st.D[p];
+        bits[p / 64] |= std::uint64_t{st.active[p] > 0.f} << (p % 64);
+      }
+  }
+  void load_tile(const RenderOutput& out, std::int64_t t, int x0, int y0, int w, int h, TileState& st) const {
+    st.reset(w, h);  // pixels outside the image stay inactive
+    const int W = out.alpha.width;
+    const std::uint64_t* bits = active_.data() + t * active_words;
+    for (int r = 0; r < h; ++r)
+      for (int c = 0; c < w; ++c) {
+        const int p = r * tile_size + c;
+        const std::size_t o = static_cast<std::size_t>(y0 + r) * W + (x0 + c);
+        st.cr[p] = out.rgb.data[o * 3 + 0];
+        st.cg[p] = out.rgb.data[o * 3 + 1];
+        st.cb[p] = out.rgb.data[o * 3 + 2];
+        st.T[p] = out.alpha.data[o];
+        if (!out.depth.data.empty()) st.D[p] = out.depth.data[o];
+        st.active[p] = (bits[p / 64] >> (p % 64)) & 1u ? 1.f : 0.f;
+      }
+    st.update_live();
+  }
+
   TiledRendererOptions opt_{};
   ProjectedSplats splats_;
   TileBins bins_;
   std::vector<float> entry_w_, entry_wfg_;  // per (tile, splat) entry partial sums
+  std::vector<std::uint8_t> done_, finished_;  // per tile: every pixel saturated (before, in this wave)
+  std::vector<std::uint64_t> active_;       // per tile: active pixels between waves
   TiledRendererTimes times_{};
 };
 
