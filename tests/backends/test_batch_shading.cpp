@@ -27,7 +27,7 @@ TEST_CASE("batch shading equals sh_to_rgb lane by lane, every degree, any lane s
       sc.set(i, mu, Eigen::Vector3f::Zero(), Eigen::Vector4f(1, 0, 0, 0), 0.f);
     }
     int compared = 0, clamped = 0;
-    for (int trial = 0; trial < 40; ++trial) {
+    for (int trial = 0; trial < 640 / L; ++trial) {  // 640 lanes on every target
       // Scattered scene indices (as with a subset), some lanes off.
       std::size_t idx[L];
       alignas(64) float mu[3][L];
