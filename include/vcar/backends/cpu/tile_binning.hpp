@@ -75,8 +75,10 @@ inline constexpr std::int64_t binning_chunks = 64;
 // Splats that touch a tile, sorted by camera depth with ties by index: records
 // (depth bits << 32 | k), made in fixed blocks (compaction order = k order), then the stable
 // radix sort of core/radix_sort.hpp (depth >= near plane > 0, so the bits order like the floats).
-// The same order for any thread count.
-inline void sort_by_depth(const ProjectedSplats& s, TileBins& bins) {
+// The same order for any thread count. Also sizes the tile grid for a width x height image.
+inline void sort_by_depth(const ProjectedSplats& s, int width, int height, TileBins& bins) {
+  bins.tiles_x = (width + tile_size - 1) / tile_size;
+  bins.tiles_y = (height + tile_size - 1) / tile_size;
   constexpr std::int64_t block = std::int64_t{1} << 16;
   const auto n = static_cast<std::int64_t>(s.size());
   const std::int64_t blocks = (n + block - 1) / block;
@@ -212,9 +214,7 @@ inline void bin_ranks(TileBins& bins, std::int64_t j0, std::int64_t j1, const st
 
 // All splats into all tiles: sort_by_depth, then bin_ranks over every rank.
 inline void bin_tiles(const ProjectedSplats& s, int width, int height, TileBins& bins) {
-  bins.tiles_x = (width + tile_size - 1) / tile_size;
-  bins.tiles_y = (height + tile_size - 1) / tile_size;
-  sort_by_depth(s, bins);
+  sort_by_depth(s, width, height, bins);
   bin_ranks(bins, 0, static_cast<std::int64_t>(bins.order.size()));
 }
 

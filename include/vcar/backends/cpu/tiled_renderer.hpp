@@ -73,7 +73,6 @@ public:
       bin_ranks(bins_, j0, j1, wave == 0 ? nullptr : done_.data());
       times_.bin_ms += ms_since(tb);
       const auto tc = Clock::now();
-      finished_.assign(static_cast<std::size_t>(tiles), 0);
       parallel_for_dynamic(tiles, [&](std::int64_t t) {
         if (done_[t]) return;
         int x0, y0, w, h;
@@ -85,16 +84,13 @@ public:
           load_tile(out, t, x0, y0, w, h, st);
         const std::int64_t b = bins_.start[t], e = bins_.start[t + 1];
         composite_tile<true, false>(splats_.splat.data(), bins_.ids.data() + b, e - b, x0, y0, w, h, st);
-        finished_[t] = st.all_done();
-        if (finished_[t] || j1 == m)
+        done_[t] = st.all_done();  // read by this tile only
+        if (done_[t] || j1 == m)
           finish_tile(st, x0, y0, w, h, bg, out);
         else
           save_tile(st, t, x0, y0, w, h, out);
       });
-      for (std::int64_t t = 0; t < tiles; ++t) {
-        saturated += finished_[t];
-        done_[t] |= finished_[t];
-      }
+      saturated = std::count(done_.begin(), done_.end(), std::uint8_t{1});
       times_.composite_ms += ms_since(tc);
       if (saturated == tiles) break;
       j0 = j1;
@@ -229,10 +225,10 @@ private:
     if (shade) shade_splats(q);
     times_.shade_ms = ms_since(ts);
     const auto t1 = Clock::now();
-    bins_.tiles_x = (q.camera->width + tile_size - 1) / tile_size;
-    bins_.tiles_y = (q.camera->height + tile_size - 1) / tile_size;
-    sort_by_depth(splats_, bins_);
-    if (bin_all) bin_ranks(bins_, 0, static_cast<std::int64_t>(bins_.order.size()));
+    if (bin_all)
+      bin_tiles(splats_, q.camera->width, q.camera->height, bins_);
+    else
+      sort_by_depth(splats_, q.camera->width, q.camera->height, bins_);  // render() bins in waves
     times_.bin_ms = ms_since(t1);
   }
 
@@ -322,7 +318,7 @@ private:
   ProjectedSplats splats_;
   TileBins bins_;
   std::vector<float> entry_w_, entry_wfg_;  // per (tile, splat) entry partial sums
-  std::vector<std::uint8_t> done_, finished_;  // per tile: every pixel saturated (before, in this wave)
+  std::vector<std::uint8_t> done_;          // per tile: every pixel saturated (render waves)
   std::vector<std::uint64_t> active_;       // per tile: active pixels between waves
   TiledRendererTimes times_{};
 };
