@@ -91,6 +91,27 @@ TEST_CASE("batch projection matches project_gaussian Gaussian by Gaussian (B.6-B
     CHECK(std::abs(s.ca - p.conic[0]) <= 2e-3f * cs);
     CHECK(std::abs(s.cb - p.conic[1]) <= 2e-3f * cs);
     CHECK(std::abs(s.cc - p.conic[2]) <= 2e-3f * cs);
+    // Exact extents: no dx brings sigma to sigma_max + slack once |dy| > ey (or |dx| > ex), and
+    // 2% inside them some point does (brute force over a grid, in double, from the float conic).
+    {
+      const double a = s.ca, b = s.cb, c = s.cc, bound = static_cast<double>(s.sigma_max) + vcar::cpu::sigma_slack;
+      const bool round = a * c - b * b > 0.05 * std::max(a, c) * std::max(a, c);  // no cancellation in the minimum
+      const auto min_sigma = [&](double dy, double reach, bool swap) {  // min over dx of sigma(dx, dy)
+        double m = 1e300;
+        for (int k = -4000; k <= 4000; ++k) {
+          const double dx = reach * k / 1000.0;
+          const double v = swap ? 0.5 * (c * dx * dx + 2 * b * dx * dy + a * dy * dy) : 0.5 * (a * dx * dx + 2 * b * dx * dy + c * dy * dy);
+          m = std::min(m, v);
+        }
+        return m;
+      };
+      if (round && s.ex < 1e3f && s.ey < 1e3f) {
+        CHECK(min_sigma(s.ey, s.ex, false) >= bound - 1e-3 * bound);
+        CHECK(min_sigma(s.ex, s.ey, true) >= bound - 1e-3 * bound);
+        CHECK(min_sigma(0.98 * (s.ey - 0.01), s.ex, false) <= bound);
+        CHECK(min_sigma(0.98 * (s.ex - 0.01), s.ey, true) <= bound);
+      }
+    }
     std::int32_t tx0, tx1, ty0, ty1;
     vcar::cpu::tile_rect(p.mean.x(), static_cast<float>(p.radius_x), tiles_x, tx0, tx1);
     vcar::cpu::tile_rect(p.mean.y(), static_cast<float>(p.radius_y), tiles_y, ty0, ty1);

@@ -129,17 +129,21 @@ inline void project_batch(const BatchCamera& c, const ProjectionParams& p, const
   const Lane ty0 = clamp_tiles(simd::floor((v - ry) * inv_ts), c.tiles_y), ty1 = clamp_tiles(simd::ceil((v + ry) * inv_ts), c.tiles_y);
 
   constexpr int L = static_cast<int>(Lane::size);
-  alignas(64) float a[16][L];
+  alignas(64) float a[17][L];
   const Lane keep = simd::select(on_screen, one, zero);
-  const Lane cols[16] = {u, v, rx, ry, S11 / det, -S01 / det, S00 / det, ln_op, op, t[2], keep, tx0, tx1, ty0, ty1, zero};
-  for (int i = 0; i < 16; ++i) cols[i].store_aligned(a[i]);
+  // Extents of the exact ellipse sigma <= sigma_max + slack: min over x of sigma at height dy is
+  // dy^2 / (2 S11), so no row beyond sqrt(2 s S11) has a pixel with alpha >= alpha_min.
+  const Lane ln_slack = simd::max(zero, ln_op) + Lane(sigma_slack), margin(1e-2f);
+  const Lane ex = simd::sqrt(two * ln_slack * S00) + margin, ey = simd::sqrt(two * ln_slack * S11) + margin;
+  const Lane cols[17] = {u, v, rx, ry, S11 / det, -S01 / det, S00 / det, ln_op, op, t[2], keep, tx0, tx1, ty0, ty1, ex, ey};
+  for (int i = 0; i < 17; ++i) cols[i].store_aligned(a[i]);
   for (int l = 0; l < lanes; ++l) {
     if (a[10][l] == 0.f) {
       out_rect[l] = 0;  // culled (gsplat)
       continue;
     }
     out_splat[l] = {a[0][l], a[1][l], a[2][l], a[3][l], a[4][l], a[5][l], a[6][l], a[7][l], a[8][l], a[9][l],
-                    0.f, 0.f, 0.f, k0 + static_cast<std::uint32_t>(l)};
+                    0.f, 0.f, 0.f, k0 + static_cast<std::uint32_t>(l), a[15][l], a[16][l]};
     out_rect[l] = pack_rect(static_cast<std::int32_t>(a[11][l]), static_cast<std::int32_t>(a[12][l]),
                             static_cast<std::int32_t>(a[13][l]), static_cast<std::int32_t>(a[14][l]));
   }

@@ -15,6 +15,9 @@
 namespace vcar::cpu {
 
 inline constexpr int tile_size = 16;  // pixels per tile side (gsplat)
+// Rounding slack on sigma_max wherever a test must not reject a pixel whose exact alpha test
+// passes (the lanes then decide exactly); it covers the float error of the conic's quadratic.
+inline constexpr float sigma_slack = 5e-2f;
 
 // What compositing reads of one splat, packed in one cache line: a tile visits its splats in
 // depth order, each once, so one line per splat beats a dozen scattered column reads.
@@ -26,6 +29,7 @@ struct alignas(64) PackedSplat {
   float opacity, depth;  // sigmoid(o), camera-space z
   float r, g, b;         // colour from SH (batch_shading.hpp; 0 where the pass needs none)
   std::uint32_t k;       // index into the request's drawn list
+  float ex, ey;          // half extents of sigma <= sigma_max + sigma_slack (px): no pixel beyond passes
 };
 static_assert(sizeof(PackedSplat) == 64, "one cache line per splat");
 

@@ -3,6 +3,7 @@
 // alpha = min(0.999, opacity exp(-sigma)), skip alpha < 1/255, stop before the Gaussian whose
 // next transmittance T (1 - alpha) would be <= 1e-4 (gsplat does not composite that one).
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 
@@ -85,11 +86,13 @@ void composite_tile(const PackedSplat* splat, const std::uint32_t* ids, std::int
     if (e + ahead < count) __builtin_prefetch(splat + ids[e + ahead]);
     const PackedSplat& s = splat[ids[e]];
     const float mx = s.mx, my = s.my, rx = s.rx, ry = s.ry;
-    // Rows and columns of the tile inside the bounding box, widened by one pixel for rounding.
-    const int r_lo = clamp_floor(my - ry - static_cast<float>(y0) - 1.f, 0);
-    const int r_hi = clamp_ceil(my + ry - static_cast<float>(y0) + 1.f, h_valid - 1);
-    const int c_lo = clamp_floor(mx - rx - static_cast<float>(x0) - 1.f, 0);
-    const int c_hi = clamp_ceil(mx + rx - static_cast<float>(x0) + 1.f, w_valid - 1);
+    // Rows and columns of the tile inside the bounding box widened by one pixel, and whose pixel
+    // centres (+0.5) lie within the exact extents ex, ey.
+    const float fx = mx - static_cast<float>(x0) - 0.5f, fy = my - static_cast<float>(y0) - 0.5f;
+    const int r_lo = clamp_floor(std::max(std::floor(fy - ry - 0.5f), std::ceil(fy - s.ey)), 0);
+    const int r_hi = clamp_ceil(std::min(std::ceil(fy + ry + 1.5f), std::floor(fy + s.ey)), h_valid - 1);
+    const int c_lo = clamp_floor(std::max(std::floor(fx - rx - 0.5f), std::ceil(fx - s.ex)), 0);
+    const int c_hi = clamp_ceil(std::min(std::ceil(fx + rx + 1.5f), std::floor(fx + s.ex)), w_valid - 1);
     if (r_lo > r_hi || c_lo > c_hi) continue;
     // Batches under the bounding box: the row's batch bits copied to rows r_lo..r_hi.
     const std::uint64_t row_bits = ((std::uint64_t{2} << (c_hi / L - c_lo / L)) - 1) << (c_lo / L);
@@ -98,53 +101,74 @@ void composite_tile(const PackedSplat* splat, const std::uint32_t* ids, std::int
     const std::uint64_t cover = (row_bits * row_ones) & (row_span << (r_lo * NB));
     if ((cover & st.live) == 0) continue;  // every pixel it covers is done
     const float ca = s.ca, cb = s.cb, cc = s.cc;
-    const float sig_max = s.sigma_max + 1e-2f;  // slack for rounding: the lanes decide exactly
+    const float sig_max = s.sigma_max + sigma_slack;  // the lanes decide exactly
     const Lane half_ca(0.5f * ca), op(s.opacity), lane_sig_max(sig_max), lmx(mx), depth(s.depth);
+    const Lane cr(s.r), cg(s.g), cbl(s.b);
     Lane sw = zero, swfg = zero;
     bool stopped = false;
-    const Lane cr(s.r), cg(s.g), cbl(s.b);
-    for (int r = r_lo; r <= r_hi; ++r) {
-      if (!((st.live >> (r * NB)) & ((std::uint64_t{1} << NB) - 1))) continue;  // row done
+    // sigma at the pixels of batch `bit`, and whether any live one may reach alpha >= 1/255.
+    auto sigma_at = [&](int bit, Lane& sigma, Lane& act) {
+      const int r = bit / NB, b = bit % NB;
       const float dy = my - (static_cast<float>(y0 + r) + 0.5f);
-      // A tile row is NB batches: testing sigma per batch is cheaper than solving for the span.
-      const Lane ydy(0.5f * cc * dy * dy), cbdy(cb * dy);
-      for (int b = c_lo / L; b <= c_hi / L; ++b) {
-        const int bit = r * NB + b;
-        if (!((st.live >> bit) & 1u)) continue;
-        const int p = r * tile_size + b * L;
-        const Lane act = Lane::load_aligned(st.active + p);
-        const auto live = act > zero;
-        const Lane dx = lmx - Lane::load_aligned(lane_x + b * L);
-        const Lane sigma = half_ca * dx * dx + cbdy * dx + ydy;
-        if (!simd::any(live && (sigma <= lane_sig_max))) continue;  // alpha < 1/255: no exp
-        const Lane alpha = simd::min(amax, op * simd::exp(-sigma));
-        const auto ok = live && (sigma >= zero) && (alpha >= askip);
-        // No branch on any(ok): it waits for exp and mispredicts often; with no lane ok, w is 0
-        // and T is stored back unchanged, so the sums below keep their bits.
-        const Lane T = Lane::load_aligned(st.T + p);
-        const Lane nT = T * (one - alpha);
-        const auto stop = ok && (nT <= tstop);
-        const auto take = ok && !stop;
-        const Lane w = simd::select(take, alpha * T, zero);
-        simd::select(take, nT, T).store_aligned(st.T + p);
-        if (simd::any(stop)) {
-          const Lane still = simd::select(stop, zero, act);
-          still.store_aligned(st.active + p);
-          if (!simd::any(still > zero)) {
-            st.live &= ~(std::uint64_t{1} << bit);
-            stopped = true;
-          }
+      act = Lane::load_aligned(st.active + r * tile_size + b * L);
+      const Lane dx = lmx - Lane::load_aligned(lane_x + b * L);
+      sigma = half_ca * dx * dx + Lane(cb * dy) * dx + Lane(0.5f * cc * dy * dy);
+      return simd::any((act > zero) && (sigma <= lane_sig_max));
+    };
+    // Front-to-back blend of the splat into batch `bit`, given alpha there.
+    auto blend = [&](int bit, const Lane& act, const Lane& sigma, const Lane& alpha) {
+      const int p = (bit / NB) * tile_size + (bit % NB) * L;
+      const auto ok = (act > zero) && (sigma >= zero) && (alpha >= askip);
+      // No branch on any(ok): it waits for exp and mispredicts often; with no lane ok, w is 0
+      // and T is stored back unchanged, so the sums below keep their bits.
+      const Lane T = Lane::load_aligned(st.T + p);
+      const Lane nT = T * (one - alpha);
+      const auto stop = ok && (nT <= tstop);
+      const auto take = ok && !stop;
+      const Lane w = simd::select(take, alpha * T, zero);
+      simd::select(take, nT, T).store_aligned(st.T + p);
+      if (simd::any(stop)) {
+        const Lane still = simd::select(stop, zero, act);
+        still.store_aligned(st.active + p);
+        if (!simd::any(still > zero)) {
+          st.live &= ~(std::uint64_t{1} << bit);
+          stopped = true;
         }
-        if constexpr (Colour) {
-          (Lane::load_aligned(st.cr + p) + w * cr).store_aligned(st.cr + p);
-          (Lane::load_aligned(st.cg + p) + w * cg).store_aligned(st.cg + p);
-          (Lane::load_aligned(st.cb + p) + w * cbl).store_aligned(st.cb + p);
-          (Lane::load_aligned(st.D + p) + w * depth).store_aligned(st.D + p);
-        }
-        if constexpr (Contrib) {
-          sw += w;
-          swfg += w * Lane::load_aligned(st.fg + p);
-        }
+      }
+      if constexpr (Colour) {
+        (Lane::load_aligned(st.cr + p) + w * cr).store_aligned(st.cr + p);
+        (Lane::load_aligned(st.cg + p) + w * cg).store_aligned(st.cg + p);
+        (Lane::load_aligned(st.cb + p) + w * cbl).store_aligned(st.cb + p);
+        (Lane::load_aligned(st.D + p) + w * depth).store_aligned(st.D + p);
+      }
+      if constexpr (Contrib) {
+        sw += w;
+        swfg += w * Lane::load_aligned(st.fg + p);
+      }
+    };
+    auto alpha_of = [&](const Lane& sigma) { return simd::min(amax, op * simd::exp(-sigma)); };
+    // The live batches under the box, two at a time: their exps are independent, and issued
+    // together their latencies overlap (one at a time, each waits out the whole chain).
+    for (std::uint64_t todo = cover & st.live; todo != 0;) {
+      const int a = std::countr_zero(todo);
+      todo &= todo - 1;
+      Lane sig_a, act_a, sig_b, act_b;
+      const bool need_a = sigma_at(a, sig_a, act_a);
+      if (todo == 0) {
+        if (need_a) blend(a, act_a, sig_a, alpha_of(sig_a));
+        break;
+      }
+      const int b = std::countr_zero(todo);
+      todo &= todo - 1;
+      const bool need_b = sigma_at(b, sig_b, act_b);
+      if (need_a && need_b) {
+        const Lane alpha_a = alpha_of(sig_a), alpha_b = alpha_of(sig_b);
+        blend(a, act_a, sig_a, alpha_a);
+        blend(b, act_b, sig_b, alpha_b);
+      } else if (need_a) {
+        blend(a, act_a, sig_a, alpha_of(sig_a));
+      } else if (need_b) {
+        blend(b, act_b, sig_b, alpha_of(sig_b));
       }
     }
     if constexpr (Contrib) {
