@@ -29,6 +29,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,7 @@
 #include "vcar/algo/boundary_distance.hpp"
 #include "vcar/algo/mean_projection.hpp"
 #include "vcar/core/camera.hpp"
+#include "vcar/core/column_block.hpp"
 #include "vcar/core/error.hpp"
 #include "vcar/core/gaussian_scene.hpp"
 #include "vcar/core/image.hpp"
@@ -330,17 +332,23 @@ class BoundaryRefinement {
                     std::to_string(scene.size()) + " Gaussians)", "BoundaryRefinement");
     const auto means = detail::candidate_means(scene, candidates_);
     const std::vector<std::uint32_t> order = morton_order(means[0].data(), means[1].data(), means[2].data(), n);
-    slot_.resize(n);
     // Geometry columns padded to whole chunk boxes: abr_geometry reads simd::width slots at a time.
     const std::size_t padded = (n + kBox - 1) / kBox * kBox;
-    for (auto& c : mu_) c.assign(padded, 0.f);
-    for (auto& c : rot_) c.assign(padded, 0.f);
-    for (auto& c : s_) c.assign(padded, 0.f);
-    for (auto& c : log_s_) c.resize(n);
-    for (auto& c : f_) c.assign(n, std::numeric_limits<float>::infinity());
-    for (auto& c : arg_) c.assign(n, no_view);
-    n_vis_.assign(n, 0);
-    n_ovf_.assign(n, 0);
+    block_ = ColumnBlock(ColumnBlock::room<std::uint32_t>(n) + 15 * ColumnBlock::room<float>(padded) +
+                         6 * ColumnBlock::room<float>(n) + 5 * ColumnBlock::room<std::uint16_t>(n));
+    slot_ = block_.take<std::uint32_t>(n);
+    auto column = [&]<class T>(std::span<T>& c, std::size_t size, T value, std::size_t from) {
+      c = block_.take<T>(size);
+      std::fill(c.begin() + static_cast<std::ptrdiff_t>(from), c.end(), value);
+    };
+    for (auto& c : mu_) column(c, padded, 0.f, n);  // the fill below writes slots < n
+    for (auto& c : rot_) column(c, padded, 0.f, n);
+    for (auto& c : s_) column(c, padded, 0.f, n);
+    for (auto& c : log_s_) column(c, n, 0.f, n);
+    for (auto& c : f_) column(c, n, std::numeric_limits<float>::infinity(), 0);
+    for (auto& c : arg_) column(c, n, no_view, 0);
+    column(n_vis_, n, std::uint16_t{0}, 0);
+    column(n_ovf_, n, std::uint16_t{0}, 0);
     for (std::size_t j = 0; j < n; ++j) slot_[order[j]] = static_cast<std::uint32_t>(j);  // slot j: candidate order[j]
     // In candidate order: the scene's columns are read in the candidates' (usually ascending)
     // order rather than gathered in Morton order, which misses the cache on every read.
@@ -830,17 +838,18 @@ class BoundaryRefinement {
   static_assert(kBox % simd::width == 0);
   static constexpr std::int64_t kChunk = 2048;
   std::vector<Index> candidates_;
-  std::vector<std::uint32_t> slot_;          // internal slot of candidate position k
   AbrParams params_;
-  std::array<std::vector<float>, 3> mu_;     // candidate means
-  std::array<std::vector<float>, 9> rot_;    // candidate rotation matrices, column-major
-  std::array<std::vector<float>, 3> s_;      // candidate scales exp(log s)
+  ColumnBlock block_;                        // the per-slot columns below, one allocation
+  std::span<std::uint32_t> slot_;            // internal slot of candidate position k
+  std::array<std::span<float>, 3> mu_;       // candidate means
+  std::array<std::span<float>, 9> rot_;      // candidate rotation matrices, column-major
+  std::array<std::span<float>, 3> s_;        // candidate scales exp(log s)
   std::vector<std::array<float, 7>> box_;    // per kBox slots: centre box lo, hi, max max_d s_d^2
   MaskTiles tiles_;                          // the current view's mask in tiles
-  LogScales log_s_;                          // candidate log-scales before refinement (by slot)
-  std::array<std::vector<float>, 3> f_;      // running minimum candidate factor per axis
-  std::vector<std::uint16_t> n_vis_, n_ovf_;  // B.3 counts
-  std::array<std::vector<std::uint16_t>, 3> arg_;  // the view that set f_ (incremental updates)
+  std::array<std::span<float>, 3> log_s_;    // candidate log-scales before refinement (by slot)
+  std::array<std::span<float>, 3> f_;        // running minimum candidate factor per axis
+  std::span<std::uint16_t> n_vis_, n_ovf_;   // B.3 counts
+  std::array<std::span<std::uint16_t>, 3> arg_;  // the view that set f_ (incremental updates)
   std::vector<std::uint8_t> mode_;           // carried / fresh / stale, after carry
   std::size_t wanted_ = 0;                   // slots not carried clean
   bool completing_ = false;                  // complete_view has started
