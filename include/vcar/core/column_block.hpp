@@ -4,7 +4,6 @@
 // 2,500 page faults, 4 ms, more than the arithmetic that fills them. A block of 2 MiB or more
 // is aligned to 2 MiB and advised to transparent huge pages where the OS has them (Linux
 // madvise), so the same state faults in five times instead; elsewhere it is plain memory.
-#include <algorithm>
 #include <cstddef>
 #include <memory>
 #include <new>
