@@ -107,17 +107,18 @@ void composite_tile(const PackedSplat* splat, const std::uint32_t* ids, std::int
     Lane sw = zero, swfg = zero;
     bool stopped = false;
     // sigma at the pixels of batch `bit`, and whether any live one may reach alpha >= 1/255.
-    auto sigma_at = [&](int bit, Lane& sigma, Lane& act) {
+    auto sigma_at = [&](int bit, Lane& sigma) {
       const int r = bit / NB, b = bit % NB;
       const float dy = my - (static_cast<float>(y0 + r) + 0.5f);
-      act = Lane::load_aligned(st.active + r * tile_size + b * L);
+      const Lane act = Lane::load_aligned(st.active + r * tile_size + b * L);
       const Lane dx = lmx - Lane::load_aligned(lane_x + b * L);
       sigma = half_ca * dx * dx + Lane(cb * dy) * dx + Lane(0.5f * cc * dy * dy);
       return simd::any((act > zero) && (sigma <= lane_sig_max));
     };
-    // Front-to-back blend of the splat into batch `bit`, given alpha there.
-    auto blend = [&](int bit, const Lane& act, const Lane& sigma, const Lane& alpha) {
+    // Front-to-back blend of the splat into batch `bit`, given sigma and alpha there.
+    auto blend = [&](int bit, const Lane& sigma, const Lane& alpha) {
       const int p = (bit / NB) * tile_size + (bit % NB) * L;
+      const Lane act = Lane::load_aligned(st.active + p);
       const auto ok = (act > zero) && (sigma >= zero) && (alpha >= askip);
       // No branch on any(ok): it waits for exp and mispredicts often; with no lane ok, w is 0
       // and T is stored back unchanged, so the sums below keep their bits.
@@ -147,29 +148,31 @@ void composite_tile(const PackedSplat* splat, const std::uint32_t* ids, std::int
       }
     };
     auto alpha_of = [&](const Lane& sigma) { return simd::min(amax, op * simd::exp(-sigma)); };
-    // The live batches under the box, two at a time: their exps are independent, and issued
-    // together their latencies overlap (one at a time, each waits out the whole chain).
-    for (std::uint64_t todo = cover & st.live; todo != 0;) {
+    // First which live batches under the box the splat may reach, with no branch per batch
+    // (whether one is needed is hard to predict; the sigmas wait on the stack), then the needed
+    // ones two at a time: their exps are independent, and issued together their latencies overlap.
+    alignas(64) float sigmas[TileState::P];  // batch `bit`'s sigma at sigmas + bit * L
+    std::uint64_t need = 0;
+    for (std::uint64_t todo = cover & st.live; todo != 0; todo &= todo - 1) {
       const int a = std::countr_zero(todo);
-      todo &= todo - 1;
-      Lane sig_a, act_a, sig_b, act_b;
-      const bool need_a = sigma_at(a, sig_a, act_a);
-      if (todo == 0) {
-        if (need_a) blend(a, act_a, sig_a, alpha_of(sig_a));
+      Lane sigma;
+      need |= static_cast<std::uint64_t>(sigma_at(a, sigma)) << a;
+      sigma.store_aligned(sigmas + a * L);
+    }
+    while (need != 0) {
+      const int a = std::countr_zero(need);
+      need &= need - 1;
+      const Lane sig_a = Lane::load_aligned(sigmas + a * L);
+      if (need == 0) {
+        blend(a, sig_a, alpha_of(sig_a));
         break;
       }
-      const int b = std::countr_zero(todo);
-      todo &= todo - 1;
-      const bool need_b = sigma_at(b, sig_b, act_b);
-      if (need_a && need_b) {
-        const Lane alpha_a = alpha_of(sig_a), alpha_b = alpha_of(sig_b);
-        blend(a, act_a, sig_a, alpha_a);
-        blend(b, act_b, sig_b, alpha_b);
-      } else if (need_a) {
-        blend(a, act_a, sig_a, alpha_of(sig_a));
-      } else if (need_b) {
-        blend(b, act_b, sig_b, alpha_of(sig_b));
-      }
+      const int b = std::countr_zero(need);
+      need &= need - 1;
+      const Lane sig_b = Lane::load_aligned(sigmas + b * L);
+      const Lane alpha_a = alpha_of(sig_a), alpha_b = alpha_of(sig_b);
+      blend(a, sig_a, alpha_a);
+      blend(b, sig_b, alpha_b);
     }
     if constexpr (Contrib) {
       entry_w[e] = simd::reduce_add(sw);
