@@ -52,12 +52,14 @@ struct TileState {
   bool all_done() const { return live == 0; }
 };
 
-// floor(v) but at least lo, ceil(v) but at most hi; in float first, so huge splats do not overflow.
+// floor(v) clamped to [lo, tile_size], ceil(v) clamped to [-1, hi]; in float first, so huge
+// splats do not overflow, and without a branch (whether a splat crosses the tile's edge is hard
+// to predict).
 inline int clamp_floor(float v, int lo) {
-  return v <= static_cast<float>(lo) ? lo : static_cast<int>(std::min(std::floor(v), static_cast<float>(tile_size)));
+  return static_cast<int>(std::max(std::min(std::floor(v), static_cast<float>(tile_size)), static_cast<float>(lo)));
 }
 inline int clamp_ceil(float v, int hi) {
-  return v >= static_cast<float>(hi) ? hi : static_cast<int>(std::max(std::ceil(v), -1.f));
+  return static_cast<int>(std::min(std::max(std::ceil(v), -1.f), static_cast<float>(hi)));
 }
 
 // Composites the splats ids[0..count) (front to back) into tile (x0, y0) of size
