@@ -68,3 +68,29 @@ TEST_CASE("run lengths equal the pixel-by-pixel runs across 64-pixel words") {
   CHECK(vcar::RleMask::encode(none).runs == std::vector<std::uint32_t>{128});
   CHECK(vcar::RleMask::encode(empty).runs == std::vector<std::uint32_t>{0});
 }
+
+TEST_CASE("MaskDecoder decodes a sequence of masks as RleMask::decode does, rewriting only foreground runs") {
+  std::mt19937 rng(11);
+  vcar::MaskDecoder decoder;
+  // Sizes change now and then (a full decode), and consecutive masks of one size share nothing
+  // on purpose: every pixel of the last foreground must be cleared.
+  const int sizes[][2] = {{37, 23}, {37, 23}, {37, 23}, {64, 5}, {64, 5}, {37, 23}, {1, 1}, {1, 1}, {37, 23}};
+  for (int round = 0; round < 3; ++round)
+    for (const auto& wh : sizes) {
+      vcar::Mask m(wh[0], wh[1], 1);
+      const unsigned density = rng() % 5;  // 0: empty, 4: full
+      for (auto& v : m.data) v = (rng() % 4 < density) ? 255 : 0;
+      const auto r = vcar::RleMask::encode(m);
+      const vcar::Mask& d = decoder.decode(r);
+      REQUIRE(d.width == m.width);
+      REQUIRE(d.height == m.height);
+      REQUIRE(d.channels == 1);
+      CHECK(d.data == r.decode().data);
+    }
+  // for_each_foreground: the runs in order, covering exactly the foreground.
+  vcar::Mask m(9, 2, 1);
+  for (int x : {0, 1, 4, 8, 9, 10, 17}) m.data[static_cast<std::size_t>(x)] = 7;
+  std::vector<std::pair<std::size_t, std::size_t>> runs;
+  vcar::RleMask::encode(m).for_each_foreground([&](std::size_t b, std::size_t e) { runs.emplace_back(b, e); });
+  CHECK(runs == std::vector<std::pair<std::size_t, std::size_t>>{{0, 2}, {4, 5}, {8, 11}, {17, 18}});
+}

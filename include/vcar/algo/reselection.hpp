@@ -76,8 +76,7 @@ public:
                       std::to_string(cam.height) + "x1", "view '" + cam.name + "'");
     mask = detail::usable(mask, params_);
     if (masks_[view]) {  // take back the old mask's votes
-      masks_[view]->decode(scratch_);
-      vote_.remove_view(cam, &scratch_);
+      vote_.remove_view(cam, &decoder_.decode(*masks_[view]));
       masks_[view].reset();
     }
     if (!mask) return;
@@ -144,24 +143,20 @@ private:
     if (incremental_abr_ && abr_ && 2 * changed.size() < std::max<std::size_t>(with_mask.size(), 1)) {
       stats_.abr_incremental = true;
       abr.carry(*abr_);
-      Mask old_mask;
-      for (std::size_t j : changed) {
-        if (abr_masks_[j]) abr_masks_[j]->decode(old_mask);
-        if (masks_[j]) masks_[j]->decode(scratch_);
-        abr.change_view(cameras_[j], abr_masks_[j] ? &old_mask : nullptr, masks_[j] ? &scratch_ : nullptr, view_id(j));
-      }
+      MaskDecoder old_decoder;
+      for (std::size_t j : changed)
+        abr.change_view(cameras_[j], abr_masks_[j] ? &old_decoder.decode(*abr_masks_[j]) : nullptr,
+                        masks_[j] ? &decoder_.decode(*masks_[j]) : nullptr, view_id(j));
       const auto cfs = abr.carried_fresh_stale();
       stats_.carried = cfs[0] + cfs[2], stats_.fresh = cfs[1], stats_.stale = cfs[2];
       if (abr.incomplete())
         for (std::size_t j : with_mask) {
-          masks_[j]->decode(scratch_);
-          abr.complete_view(cameras_[j], scratch_, view_id(j));
+          abr.complete_view(cameras_[j], decoder_.decode(*masks_[j]), view_id(j));
         }
     } else {
       stats_.fresh = selected.size();
       for (std::size_t j : with_mask) {
-        masks_[j]->decode(scratch_);
-        abr.add_view(cameras_[j], scratch_, view_id(j));
+        abr.add_view(cameras_[j], decoder_.decode(*masks_[j]), view_id(j));
       }
     }
     AbrResult a = abr.finish();
@@ -182,7 +177,7 @@ private:
   std::optional<BoundaryRefinement> abr_;  // the latest select()'s refinement
   ReselectionStats stats_;
   bool incremental_abr_ = true;
-  Mask scratch_;
+  MaskDecoder decoder_;
 };
 
 }  // namespace vcar

@@ -66,6 +66,43 @@ struct RleMask {
     return m;
   }
   std::size_t bytes() const noexcept { return runs.size() * sizeof(std::uint32_t); }
+
+  // f(begin, end) for each foreground run [begin, end) of row-major pixels, in order.
+  template <class F>
+  void for_each_foreground(F&& f) const {
+    std::size_t p = 0;
+    bool fg = false;
+    for (std::uint32_t run : runs) {
+      if (fg && run) f(p, p + run);
+      p += run;
+      fg = !fg;
+    }
+  }
+};
+
+// Decodes run-length masks one after another into one Mask, in time that grows with their
+// foreground rather than with the image: a mask of the size decoded last only clears the last
+// one's foreground runs and writes its own (ABR decodes every view's mask, once or twice).
+class MaskDecoder {
+public:
+  // The decoded mask (foreground pixels 255), valid until the next call.
+  const Mask& decode(const RleMask& r) {
+    if (r.width != mask_.width || r.height != mask_.height || mask_.channels != 1) {
+      r.decode(mask_);
+    } else {
+      std::uint8_t* px = mask_.data.data();
+      last_.for_each_foreground([&](std::size_t b, std::size_t e) { std::fill(px + b, px + e, std::uint8_t{0}); });
+      r.for_each_foreground([&](std::size_t b, std::size_t e) { std::fill(px + b, px + e, std::uint8_t{255}); });
+    }
+    last_.width = r.width;
+    last_.height = r.height;
+    last_.runs.assign(r.runs.begin(), r.runs.end());
+    return mask_;
+  }
+
+private:
+  Mask mask_;    // the decode of last_
+  RleMask last_;
 };
 
 }  // namespace vcar
