@@ -45,3 +45,41 @@ TEST_CASE("project_box decides a box only when every mean in it agrees with Eq. 
   CHECK(decided[BoxView::all_visible] > 20);
   CHECK(decided[BoxView::partial] > 20);
 }
+
+TEST_CASE("project_boxes answers each lane as project_box does for that lane's box and view") {
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<float> U(-2.f, 2.f), S(0.01f, 0.8f);
+  constexpr std::size_t L = vcar::simd::width;
+  for (int trial = 0; trial < 50; ++trial) {
+    std::vector<vcar::detail::MeanProjection> views;
+    std::vector<std::array<float, 7>> boxes;
+    const std::size_t count = 1 + static_cast<std::size_t>(rng() % L);  // lanes past count repeat the last
+    for (std::size_t l = 0; l < count; ++l) {
+      const Eigen::Vector3f eye(U(rng), U(rng), U(rng) - 2.5f);
+      views.push_back(vcar::detail::MeanProjection::from(
+          Camera::look_at(eye, {U(rng) * 0.3f, U(rng) * 0.3f, 0.f}, {0, -1, 0}, {64, 48, 50, 55, 31.5f, 24.5f})));
+      std::array<float, 7> b{U(rng), U(rng), U(rng), 0.f, 0.f, 0.f, 0.f};
+      for (int d = 0; d < 3; ++d) b[3 + d] = b[d] + S(rng);
+      if (l == 1 && trial % 5 == 0) b[4] = INFINITY;  // a non-finite box: partial, per-mean test
+      boxes.push_back(b);
+    }
+    std::vector<const vcar::detail::MeanProjection*> ptr;
+    for (const auto& v : views) ptr.push_back(&v);
+    vcar::detail::BoxViewLanes lanes;
+    vcar::detail::project_boxes(vcar::detail::ViewLanes::of(ptr.data(), count),
+                                vcar::detail::BoxLanes::of(boxes.data(), count), lanes);
+    for (std::size_t l = 0; l < L; ++l) {
+      const std::size_t k = std::min(l, count - 1);
+      const BoxView want = vcar::detail::project_box(views[k], boxes[k].data(), boxes[k].data() + 3);
+      const BoxView got = lanes[l];
+      INFO("trial " << trial << " lane " << l);
+      CHECK(got.visibility == want.visibility);
+      CHECK(got.x0 == want.x0);
+      CHECK(got.y0 == want.y0);
+      CHECK(got.x1 == want.x1);
+      CHECK(got.y1 == want.y1);
+      CHECK(got.zmin == want.zmin);
+      if (!std::isfinite(boxes[k][4])) CHECK(got.visibility == BoxView::partial);
+    }
+  }
+}

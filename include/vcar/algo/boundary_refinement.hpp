@@ -701,17 +701,29 @@ class BoundaryRefinement {
     if (!(1.f >= p.projection.alpha_min)) return;  // rule (e): no Gaussian is eligible
     AbrObservation inside;  // eligible, no endpoint outside, no factor
     inside.eligible = true;
-    const detail::MeanProjection P = detail::MeanProjection::from(cam);
+    const detail::ViewLanes view = detail::ViewLanes::of(detail::MeanProjection::from(cam));
     const AbrCamera C = AbrCamera::from(cam, p.projection);
     const std::int64_t n_boxes = static_cast<std::int64_t>(boxes ? boxes->size() : box_.size());
     parallel_chunks(n_boxes, kChunk / kBox, [&](std::int64_t, std::int64_t b, std::int64_t e) {
+      constexpr std::size_t L = simd::width;
+      std::array<float, 7> group[L];  // the boxes of the next L chunks, projected together
+      detail::BoxViewLanes projected;
       for (std::int64_t i = b; i < e; ++i) {
-        const std::size_t c = boxes ? (*boxes)[static_cast<std::size_t>(i)] : static_cast<std::size_t>(i);
+        auto chunk_at = [&](std::int64_t at) {
+          return boxes ? (*boxes)[static_cast<std::size_t>(at)] : static_cast<std::size_t>(at);
+        };
+        const std::size_t c = chunk_at(i);
+        if (tiles && (i - b) % static_cast<std::int64_t>(L) == 0) {
+          const std::size_t count = static_cast<std::size_t>(std::min<std::int64_t>(static_cast<std::int64_t>(L), e - i));
+          for (std::size_t l = 0; l < count; ++l) group[l] = box_[chunk_at(i + static_cast<std::int64_t>(l))];
+          detail::project_boxes(view, detail::BoxLanes::of(group, count), projected);
+        }
         const std::size_t j0 = c * kBox, j1 = std::min(size(), j0 + kBox);
         bool any = false;
         for (std::size_t k = j0; k < j1 && !any; ++k) any = want(k);
         if (!any) continue;
-        switch (tiles ? chunk_content(P, C, cam, box_[c], p) : MaskTiles::mixed) {
+        switch (tiles ? chunk_content(projected[static_cast<std::size_t>(i - b) % L], C, cam, box_[c], p)
+                      : MaskTiles::mixed) {
           case MaskTiles::background: continue;  // no centre on foreground: none eligible (B.1)
           case MaskTiles::foreground:            // every centre and endpoint on foreground
             for (std::size_t k = j0; k < j1; ++k)
@@ -813,9 +825,9 @@ class BoundaryRefinement {
   // every 3-sigma endpoint lands on foreground inside the image (all eligible, none overflows:
   // Eq. 9's endpoints lie within sigma_c sqrt(lambda_1) of the centre, and by Eq. 10 lambda_1 <=
   // ||J||^2 max_d s_d^2 + eps2d); mixed otherwise (observed Gaussian by Gaussian).
-  MaskTiles::Content chunk_content(const detail::MeanProjection& P, const AbrCamera& C, const Camera& cam,
+  // `v`: the chunk's box in this view (detail::project_boxes).
+  MaskTiles::Content chunk_content(const detail::BoxView& v, const AbrCamera& C, const Camera& cam,
                                    const std::array<float, 7>& b, const AbrParams& p) const {
-    const detail::BoxView v = detail::project_box(P, b.data(), b.data() + 3);
     if (v.visibility == detail::BoxView::none_visible) return MaskTiles::background;
     const MaskTiles::Content centres = tiles_.classify(v.x0, v.y0, v.x1, v.y1);
     if (centres == MaskTiles::background) return MaskTiles::background;

@@ -120,61 +120,141 @@ struct BoxView {
   float zmin = 0.f;                    // smallest camera depth of the corners (when in front)
 };
 
-inline BoxView project_box(const MeanProjection& w, const float lo[3], const float hi[3]) {
-  BoxView out;
-  out.x1 = w.width - 1;  // until known: the whole image
-  out.y1 = w.height - 1;
-  float scale = 0;  // magnitude of the terms of t = R mu + t_w (rounding is relative to it)
-  for (int r = 0; r < 3; ++r) {
-    float s = std::abs(w.t[r]);
-    for (int k = 0; k < 3; ++k) s += std::abs(w.R[3 * r + k]) * std::max(std::abs(lo[k]), std::abs(hi[k]));
-    scale = std::max(scale, s);
-  }
-  for (int k = 0; k < 3; ++k)
-    if (!std::isfinite(lo[k]) || !std::isfinite(hi[k])) return out;  // non-finite box: per-mean test
-  if (!(scale < 1e30f)) return out;
-  // The 8 corners in SIMD lanes (corner c = lane mod 8: bit d of c picks hi over lo on axis d),
-  // projected with project()'s arithmetic; a 16-lane batch holds each corner twice.
+// Views in SIMD lanes (lane l: one view's projection), for project_boxes.
+struct ViewLanes {
   using B = simd::batch<float>;
-  constexpr std::size_t L = simd::width, N = L > 8 ? L : 8;
-  alignas(64) static constexpr auto corner_bit = [] {
-    std::array<std::array<float, N>, 3> b{};
-    for (std::size_t c = 0; c < N; ++c)
-      for (int d = 0; d < 3; ++d) b[d][c] = static_cast<float>(((c % 8) >> d) & 1);
+  B R[9], t[3], abs_R[9], abs_t[3], fx, fy, cx, cy, W, H;
+
+  // Lane l: views[min(l, count - 1)] (count >= 1).
+  static ViewLanes of(const MeanProjection* const* views, std::size_t count) {
+    constexpr std::size_t L = simd::width;
+    alignas(64) float lane[30][L];
+    for (std::size_t l = 0; l < L; ++l) {
+      const MeanProjection& w = *views[std::min(l, count - 1)];
+      for (int i = 0; i < 9; ++i) lane[i][l] = w.R[i], lane[12 + i][l] = std::abs(w.R[i]);
+      for (int i = 0; i < 3; ++i) lane[9 + i][l] = w.t[i], lane[21 + i][l] = std::abs(w.t[i]);
+      lane[24][l] = w.fx, lane[25][l] = w.fy, lane[26][l] = w.cx, lane[27][l] = w.cy;
+      lane[28][l] = static_cast<float>(w.width), lane[29][l] = static_cast<float>(w.height);
+    }
+    ViewLanes v;
+    for (int i = 0; i < 9; ++i) v.R[i] = B::load_aligned(lane[i]), v.abs_R[i] = B::load_aligned(lane[12 + i]);
+    for (int i = 0; i < 3; ++i) v.t[i] = B::load_aligned(lane[9 + i]), v.abs_t[i] = B::load_aligned(lane[21 + i]);
+    v.fx = B::load_aligned(lane[24]), v.fy = B::load_aligned(lane[25]);
+    v.cx = B::load_aligned(lane[26]), v.cy = B::load_aligned(lane[27]);
+    v.W = B::load_aligned(lane[28]), v.H = B::load_aligned(lane[29]);
+    return v;
+  }
+  static ViewLanes of(const MeanProjection& w) {
+    const MeanProjection* p = &w;
+    return of(&p, 1);
+  }
+};
+
+// project_boxes' answers, lane by lane.
+struct BoxViewLanes {
+  static constexpr std::size_t L = simd::width;
+  alignas(64) std::int32_t visibility[L], x0[L], y0[L], x1[L], y1[L];
+  alignas(64) float zmin[L];
+  BoxView operator[](std::size_t l) const {
+    BoxView v;
+    v.visibility = static_cast<BoxView::Case>(visibility[l]);
+    v.x0 = x0[l], v.y0 = y0[l], v.x1 = x1[l], v.y1 = y1[l];
+    v.zmin = zmin[l];
+    return v;
+  }
+};
+
+// Boxes in SIMD lanes (lane l: lo[d], hi[d] of one box), for project_boxes.
+struct BoxLanes {
+  using B = simd::batch<float>;
+  B lo[3], hi[3];
+
+  // The same box in every lane.
+  static BoxLanes of(const float lo[3], const float hi[3]) {
+    BoxLanes b;
+    for (int d = 0; d < 3; ++d) b.lo[d] = B(lo[d]), b.hi[d] = B(hi[d]);
     return b;
-  }();
-  alignas(64) float us[N], vs[N], zs[N];
-  for (std::size_t c0 = 0; c0 < N; c0 += L) {
-    B p[3];
-    for (int d = 0; d < 3; ++d) p[d] = simd::select(B::load_aligned(corner_bit[d].data() + c0) > B(0.5f), B(hi[d]), B(lo[d]));
-    const ImagePoints q = image_points(w, p[0], p[1], p[2]);  // (u, v: unused where z <= 0)
-    q.z.store_aligned(zs + c0);
-    q.u.store_aligned(us + c0);
-    q.v.store_aligned(vs + c0);
   }
-  float zmin = zs[0], zmax = zs[0];
-  for (std::size_t c = 1; c < 8; ++c) zmin = std::min(zmin, zs[c]), zmax = std::max(zmax, zs[c]);
-  const float dz = 1e-5f * scale;
-  if (zmax < -dz) { out.visibility = BoxView::none_visible; return out; }  // every z < 0
-  if (!(zmin > dz)) return out;                                            // straddles z = 0
-  out.zmin = zmin;
-  float umin = us[0], umax = us[0], vmin = vs[0], vmax = vs[0];
-  for (std::size_t c = 1; c < 8; ++c) {
-    umin = std::min(umin, us[c]); umax = std::max(umax, us[c]);
-    vmin = std::min(vmin, vs[c]); vmax = std::max(vmax, vs[c]);
+  // Lane l: boxes[min(l, count - 1)] (lo x, y, z, hi x, y, z first; count >= 1).
+  template <std::size_t N>
+  static BoxLanes of(const std::array<float, N>* boxes, std::size_t count) {
+    static_assert(N >= 6);
+    constexpr std::size_t L = simd::width;
+    alignas(64) float lane[6][L];
+    for (std::size_t l = 0; l < L; ++l)
+      for (int i = 0; i < 6; ++i) lane[i][l] = boxes[std::min(l, count - 1)][static_cast<std::size_t>(i)];
+    BoxLanes b;
+    for (int d = 0; d < 3; ++d) b.lo[d] = B::load_aligned(lane[d]), b.hi[d] = B::load_aligned(lane[3 + d]);
+    return b;
   }
+};
+
+// project_box lane by lane: box lane l in view lane l. The vote decides one chunk in several
+// views with one call (the box in every lane), ABR several chunks in one view.
+inline void project_boxes(const ViewLanes& w, const BoxLanes& b, BoxViewLanes& out) {
+  using B = simd::batch<float>;
+  const B zero(0.f), one(1.f);
+  // Magnitude of the terms of t = R mu + t_w (rounding is relative to it), and whether the box
+  // is finite (x - x is 0 exactly for finite x).
+  auto magnitude = [](const B& p, const B& q) { return simd::max(simd::max(p, -p), simd::max(q, -q)); };
+  const B extent[3] = {magnitude(b.lo[0], b.hi[0]), magnitude(b.lo[1], b.hi[1]), magnitude(b.lo[2], b.hi[2])};
+  auto finite = (b.lo[0] - b.lo[0] >= zero) & (b.hi[0] - b.hi[0] >= zero);
+  for (int k = 1; k < 3; ++k) finite = finite & (b.lo[k] - b.lo[k] >= zero) & (b.hi[k] - b.hi[k] >= zero);
+  B scale = zero;
+  for (int r = 0; r < 3; ++r) {
+    B sr = w.abs_t[r];
+    for (int k = 0; k < 3; ++k) sr = sr + w.abs_R[3 * r + k] * extent[k];
+    scale = simd::max(scale, sr);
+  }
+  const auto ok = finite & (scale < B(1e30f));  // else: per-mean test
+  // The 8 corners (bit d of c picks hi over lo on axis d), projected with project()'s
+  // arithmetic; their least and greatest depth and image coordinates.
+  B zmin, zmax, umin, umax, vmin, vmax;
+  for (int c = 0; c < 8; ++c) {
+    const B& X = (c & 1) ? b.hi[0] : b.lo[0];
+    const B& Y = (c & 2) ? b.hi[1] : b.lo[1];
+    const B& Z = (c & 4) ? b.hi[2] : b.lo[2];
+    auto row = [&](int r) { return simd::fma(w.R[3 * r], X, simd::fma(w.R[3 * r + 1], Y, simd::fma(w.R[3 * r + 2], Z, w.t[r]))); };
+    const B tx = row(0), ty = row(1), tz = row(2);
+    const B u = (w.fx * tx) / tz + w.cx, v = (w.fy * ty) / tz + w.cy;  // conventions §2
+    if (c == 0) {
+      zmin = zmax = tz, umin = umax = u, vmin = vmax = v;
+      continue;
+    }
+    zmin = simd::min(zmin, tz), zmax = simd::max(zmax, tz);
+    umin = simd::min(umin, u), umax = simd::max(umax, u);
+    vmin = simd::min(vmin, v), vmax = simd::max(vmax, v);
+  }
+  const B dz = B(1e-5f) * scale;
+  const auto behind = ok & (zmax < -dz);  // every z < 0
+  const auto front = ok & (zmin > dz);    // else straddles z = 0 (or not ok): per-mean test
   // Rounding of u = fx x / z + cx per mean: well below this margin (pixels).
-  const float m = 0.5f + 1e-5f * ((w.fx + w.fy) * scale / zmin + std::max(std::abs(umin), std::abs(umax)) +
-                                  std::max(std::abs(vmin), std::abs(vmax)));
-  umin -= m; umax += m; vmin -= m; vmax += m;
-  const float W = static_cast<float>(w.width), H = static_cast<float>(w.height);
-  if (umax < 0.f || vmax < 0.f || umin >= W || vmin >= H) { out.visibility = BoxView::none_visible; return out; }
-  out.x0 = static_cast<int>(std::floor(std::max(umin, 0.f)));
-  out.y0 = static_cast<int>(std::floor(std::max(vmin, 0.f)));
-  out.x1 = static_cast<int>(std::floor(std::min(umax, W - 1.f)));
-  out.y1 = static_cast<int>(std::floor(std::min(vmax, H - 1.f)));
-  if (umin >= 0.f && vmin >= 0.f && umax < W && vmax < H) out.visibility = BoxView::all_visible;
-  return out;
+  const B m = B(0.5f) + B(1e-5f) * ((w.fx + w.fy) * scale / zmin + magnitude(umin, umax) + magnitude(vmin, vmax));
+  umin = umin - m, umax = umax + m, vmin = vmin - m, vmax = vmax + m;
+  const auto outside = front & ((umax < zero) | (vmax < zero) | (umin >= w.W) | (vmin >= w.H));
+  const auto inside = front & !outside;
+  const auto all = inside & (umin >= zero) & (vmin >= zero) & (umax < w.W) & (vmax < w.H);
+  // The rectangle where inside (clamped to the image, so every lane converts safely); the whole
+  // image elsewhere.
+  const B W1 = w.W - one, H1 = w.H - one;
+  auto pixel = [&](const B& p, const B& hi_p, const B& fallback) {
+    return simd::to_int(simd::floor(simd::select(inside, simd::min(simd::max(p, zero), hi_p), fallback)));
+  };
+  pixel(umin, W1, zero).store_aligned(out.x0);
+  pixel(vmin, H1, zero).store_aligned(out.y0);
+  pixel(umax, W1, W1).store_aligned(out.x1);
+  pixel(vmax, H1, H1).store_aligned(out.y1);
+  simd::select(inside, zmin, zero).store_aligned(out.zmin);
+  const B none(static_cast<float>(BoxView::none_visible)), every(static_cast<float>(BoxView::all_visible)),
+      partial(static_cast<float>(BoxView::partial));
+  simd::to_int(simd::select(behind | outside, none, simd::select(all, every, partial))).store_aligned(out.visibility);
+}
+
+// project_boxes for one box in one view.
+inline BoxView project_box(const MeanProjection& w, const float lo[3], const float hi[3]) {
+  BoxViewLanes out;
+  project_boxes(ViewLanes::of(w), BoxLanes::of(lo, hi), out);
+  return out[0];
 }
 
 // Bounding box (lo x, y, z, hi x, y, z) of the means [begin, end) of SoA columns; a non-finite

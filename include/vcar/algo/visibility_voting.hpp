@@ -107,9 +107,10 @@ inline void fold_counts(std::uint16_t* __restrict out, const std::int32_t* __res
 // Votes chunks [c0, c1) in every queued view. Counters are by sorted position; fg has
 // n_objects rows of stride `n`. Per chunk, counts over the queued views are summed in 32-bit
 // arrays (SIMD adds, in L1) plus per-chunk constants, and added to the uint16 counters once.
+// `lanes[g]` holds views g * simd::width onwards in its lanes (project_boxes).
 inline void vote_chunks(const ChunkedMeans& cm, std::size_t c0, std::size_t c1, std::span<const VoteView> views,
-                        const MaskTiles* tiles, int n_objects, std::uint16_t* visible,
-                        std::uint16_t* fg, std::size_t n) {
+                        std::span<const ViewLanes> lanes, const MaskTiles* tiles, int n_objects,
+                        std::uint16_t* visible, std::uint16_t* fg, std::size_t n) {
   using BI = simd::batch<std::int32_t>;
   constexpr std::size_t L = mean_batch, C = ChunkedMeans::chunk_size;
   constexpr std::size_t max_objects = max_vote_objects;
@@ -117,6 +118,8 @@ inline void vote_chunks(const ChunkedMeans& cm, std::size_t c0, std::size_t c1, 
   alignas(64) std::int32_t acc[(1 + 4) * C];  // visible + up to 4 objects in one pass
   std::int32_t add[1 + max_objects];
   MaskTiles::Content content[max_objects];
+  constexpr std::size_t VL = simd::width;
+  BoxViewLanes box_views;
   const float* x = cm.xyz[0].data();
   const float* y = cm.xyz[1].data();
   const float* z = cm.xyz[2].data();
@@ -126,9 +129,11 @@ inline void vote_chunks(const ChunkedMeans& cm, std::size_t c0, std::size_t c1, 
       const std::size_t j0 = c * C;
       std::fill(acc, acc + (1 + k1 - o0) * C, 0);
       std::fill(add, add + 1 + K, 0);
-      const float* lo = cm.box[c].data();
-      for (const VoteView& w : views) {
-        const BoxView b = project_box(w.P, lo, lo + 3);
+      const BoxLanes box = BoxLanes::of(cm.box[c].data(), cm.box[c].data() + 3);
+      for (std::size_t i = 0; i < views.size(); ++i) {
+        if (i % VL == 0) project_boxes(lanes[i / VL], box, box_views);  // the chunk in the next VL views
+        const VoteView& w = views[i];
+        const BoxView b = box_views[i % VL];
         if (b.visibility == BoxView::none_visible) continue;
         bool uniform = b.visibility == BoxView::all_visible && !w.depth;
         for (std::size_t k = o0; k < k1; ++k) {
@@ -260,8 +265,15 @@ public:
     if (queue_.empty()) return;
     const std::size_t per_task = std::max<std::size_t>(1, chunk / detail::ChunkedMeans::chunk_size);
     const std::int64_t chunks = static_cast<std::int64_t>(means_.chunks());
+    lanes_.clear();
+    for (std::size_t i = 0; i < queue_.size(); i += simd::width) {
+      const detail::MeanProjection* P[simd::width];
+      const std::size_t count = std::min(simd::width, queue_.size() - i);
+      for (std::size_t l = 0; l < count; ++l) P[l] = &queue_[i + l].P;
+      lanes_.push_back(detail::ViewLanes::of(P, count));
+    }
     parallel_chunks(chunks, static_cast<std::int64_t>(per_task), [&](std::int64_t, std::int64_t b, std::int64_t e) {
-      detail::vote_chunks(means_, static_cast<std::size_t>(b), static_cast<std::size_t>(e), queue_, tiles_.data(),
+      detail::vote_chunks(means_, static_cast<std::size_t>(b), static_cast<std::size_t>(e), queue_, lanes_, tiles_.data(),
                           n_objects_, visible_.data(), fg_.data(), n_);
     });
     queue_.clear();
@@ -393,6 +405,7 @@ private:
   mutable std::vector<std::uint16_t> visible_;  // V_i, by sorted position
   mutable std::vector<std::uint16_t> fg_;       // F_i per object, object-major, by sorted position
   mutable std::vector<detail::VoteView> queue_;
+  mutable std::vector<detail::ViewLanes> lanes_;  // the queued views' projections in SIMD lanes
   std::vector<MaskTiles> tiles_;                // per queued view and object: packed masks (capacity reused)
 };
 
