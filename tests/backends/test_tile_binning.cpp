@@ -75,3 +75,15 @@ TEST_CASE("tile binning: depth order is the stable sort by depth, for any thread
   }
   vcar::set_num_threads(saved);
 }
+
+TEST_CASE("tile binning: one depth for every splat keeps drawn order (a zero-bit sort key)") {
+  vcar::cpu::ProjectedSplats s = random_splats(70001, 5u, true);
+  std::vector<std::uint32_t> expected;
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    s.splat[k].depth = s.depth[k] = 3.25f;
+    if (!vcar::cpu::rect_empty(s.rect[k])) expected.push_back(static_cast<std::uint32_t>(k));
+  }
+  vcar::cpu::TileBins bins;
+  vcar::cpu::bin_tiles(s, 160, 160, bins);
+  CHECK(bins.order == expected);
+}

@@ -77,8 +77,10 @@ struct TileBins {
 inline constexpr std::int64_t binning_chunks = 64;
 
 // Splats that touch a tile, sorted by camera depth with ties by index: records
-// (depth bits << 32 | k), made in fixed blocks (compaction order = k order), then the stable
-// radix sort of core/radix_sort.hpp (depth >= near plane > 0, so the bits order like the floats).
+// (depth key << 32 | k), made in fixed blocks (compaction order = k order), then the stable
+// radix sort of core/radix_sort.hpp. The key is the depth's bits less the least depth's bits:
+// depth >= near plane > 0, so the bits order like the floats, and a scene's depths span far
+// fewer than 32 bits of them (2 to 10: 25 bits, three passes of the sort instead of four).
 // The same order for any thread count. Also sizes the tile grid for a width x height image.
 inline void sort_by_depth(const ProjectedSplats& s, int width, int height, TileBins& bins) {
   bins.tiles_x = (width + tile_size - 1) / tile_size;
@@ -88,27 +90,33 @@ inline void sort_by_depth(const ProjectedSplats& s, int width, int height, TileB
   const std::int64_t blocks = (n + block - 1) / block;
   std::vector<std::int64_t> at(static_cast<std::size_t>(blocks) + 1, 0);
   std::vector<std::uint32_t> largest(static_cast<std::size_t>(blocks), 0);
-  parallel_for(blocks, [&](std::int64_t b) {  // kept splats and the largest depth bits per block
+  std::vector<std::uint32_t> least(static_cast<std::size_t>(blocks), ~std::uint32_t{0});
+  parallel_for(blocks, [&](std::int64_t b) {  // kept splats and their depth bits' range per block
     std::int64_t kept = 0;
-    std::uint32_t top = 0;
+    std::uint32_t top = 0, bottom = ~std::uint32_t{0};
     for (std::int64_t k = b * block, e = std::min(n, k + block); k < e; ++k)
       if (!rect_empty(s.rect[k])) {
         ++kept;
-        top = std::max(top, std::bit_cast<std::uint32_t>(s.depth[k]));
+        const auto bits = std::bit_cast<std::uint32_t>(s.depth[k]);
+        top = std::max(top, bits);
+        bottom = std::min(bottom, bits);
       }
     at[b + 1] = kept;
     largest[b] = top;
+    least[b] = bottom;
   });
   for (std::int64_t b = 0; b < blocks; ++b) at[b + 1] += at[b];
   const auto m = static_cast<std::size_t>(at[blocks]);
+  const std::uint32_t base = m ? *std::min_element(least.begin(), least.end()) : 0u;
+  const std::uint32_t top = m ? *std::max_element(largest.begin(), largest.end()) - base : 0u;
   bins.record.resize(m);
   parallel_for(blocks, [&](std::int64_t b) {
     std::uint64_t* out = bins.record.data() + at[b];
     for (std::int64_t k = b * block, e = std::min(n, k + block); k < e; ++k)
       if (!rect_empty(s.rect[k]))
-        *out++ = static_cast<std::uint64_t>(std::bit_cast<std::uint32_t>(s.depth[k])) << 32 | static_cast<std::uint64_t>(k);
+        *out++ = static_cast<std::uint64_t>(std::bit_cast<std::uint32_t>(s.depth[k]) - base) << 32 | static_cast<std::uint64_t>(k);
   });
-  sort_by_upper_word(bins.record, bins.record_tmp, largest.empty() ? 0u : *std::max_element(largest.begin(), largest.end()));
+  sort_by_upper_word(bins.record, bins.record_tmp, top);
   // The rectangles in depth order, for the counting and scatter passes. (The packed splats stay
   // where they are: gathering them in depth order, 64 bytes each, cost more than it saved the
   // compositing, which reads only the splats in front of saturated pixels.) Each rectangle is
