@@ -62,14 +62,21 @@ struct ProjectedBatch {
 struct ImagePoints {
   simd::batch<float> u, v, z;
 };
-inline ImagePoints image_points(const MeanProjection& w, const simd::batch<float>& X, const simd::batch<float>& Y,
-                                const simd::batch<float>& Z) {
+// The camera's values are floats (one camera, in every lane) or batches (one camera per lane,
+// project_boxes); either way each lane runs the same operations.
+template <class T>
+inline ImagePoints image_points(const T (&R)[9], const T (&t)[3], const T& fx, const T& fy, const T& cx, const T& cy,
+                                const simd::batch<float>& X, const simd::batch<float>& Y, const simd::batch<float>& Z) {
   using B = simd::batch<float>;
   auto row = [&](int r) {  // t = R_w mu + t_w
-    return simd::fma(B(w.R[3 * r]), X, simd::fma(B(w.R[3 * r + 1]), Y, simd::fma(B(w.R[3 * r + 2]), Z, B(w.t[r]))));
+    return simd::fma(B(R[3 * r]), X, simd::fma(B(R[3 * r + 1]), Y, simd::fma(B(R[3 * r + 2]), Z, B(t[r]))));
   };
   const B tx = row(0), ty = row(1), tz = row(2);
-  return {(B(w.fx) * tx) / tz + B(w.cx), (B(w.fy) * ty) / tz + B(w.cy), tz};  // conventions §2: u = fx x / z + cx
+  return {(B(fx) * tx) / tz + B(cx), (B(fy) * ty) / tz + B(cy), tz};  // conventions §2: u = fx x / z + cx
+}
+inline ImagePoints image_points(const MeanProjection& w, const simd::batch<float>& X, const simd::batch<float>& Y,
+                                const simd::batch<float>& Z) {
+  return image_points(w.R, w.t, w.fx, w.fy, w.cx, w.cy, X, Y, Z);
 }
 
 inline ProjectedBatch project(const MeanProjection& w, const float* x, const float* y, const float* z) {
@@ -214,9 +221,7 @@ inline void project_boxes(const ViewLanes& w, const BoxLanes& b, BoxViewLanes& o
     const B& X = (c & 1) ? b.hi[0] : b.lo[0];
     const B& Y = (c & 2) ? b.hi[1] : b.lo[1];
     const B& Z = (c & 4) ? b.hi[2] : b.lo[2];
-    auto row = [&](int r) { return simd::fma(w.R[3 * r], X, simd::fma(w.R[3 * r + 1], Y, simd::fma(w.R[3 * r + 2], Z, w.t[r]))); };
-    const B tx = row(0), ty = row(1), tz = row(2);
-    const B u = (w.fx * tx) / tz + w.cx, v = (w.fy * ty) / tz + w.cy;  // conventions §2
+    const auto [u, v, tz] = image_points(w.R, w.t, w.fx, w.fy, w.cx, w.cy, X, Y, Z);
     if (c == 0) {
       zmin = zmax = tz, umin = umax = u, vmin = vmax = v;
       continue;
