@@ -44,9 +44,9 @@ TEST_CASE("ColumnBlock: columns are aligned, disjoint and hold what is written")
 }
 
 TEST_CASE("ColumnBlock: a block of 2 MiB or more starts on a huge-page boundary") {
-  vcar::ColumnBlock block(vcar::ColumnBlock::huge_page + 64);
-  auto a = block.take<float>(vcar::ColumnBlock::huge_page / sizeof(float) + 16);
-  CHECK(address(a.data()) % vcar::ColumnBlock::huge_page == 0);
+  vcar::ColumnBlock block(vcar::huge_pages::page + 64);
+  auto a = block.take<float>(vcar::huge_pages::page / sizeof(float) + 16);
+  CHECK(address(a.data()) % vcar::huge_pages::page == 0);
   a.back() = 1.f;  // the last element is inside the block
   CHECK(a.back() == 1.f);
 }

@@ -2,8 +2,8 @@
 // One allocation for many per-element columns (structure of arrays). A state of n elements x
 // b bytes faults in one page per 4 KiB on first touch: 100k ABR candidates (10 MB) cost about
 // 2,500 page faults, 4 ms, more than the arithmetic that fills them. A block of 2 MiB or more
-// is aligned to 2 MiB and advised to transparent huge pages where the OS has them (Linux
-// madvise), so the same state faults in five times instead; elsewhere it is plain memory.
+// is aligned to 2 MiB and advised to transparent huge pages where the OS has them
+// (core/huge_pages.hpp), so the same state faults in five times instead.
 #include <cstddef>
 #include <memory>
 #include <new>
@@ -11,23 +11,20 @@
 #include <type_traits>
 #include <utility>
 
-#if defined(__linux__) && !defined(__EMSCRIPTEN__)
-#include <sys/mman.h>
-#endif
+#include "vcar/core/huge_pages.hpp"
 
 namespace vcar {
 
 namespace detail {
-struct AlignedDelete {
-  std::size_t alignment = 64;
-  void operator()(std::byte* p) const noexcept { ::operator delete(p, std::align_val_t(alignment)); }
+struct BlockDelete {
+  std::size_t bytes = 0;
+  void operator()(std::byte* p) const noexcept { huge_pages::release(p, bytes); }
 };
 }  // namespace detail
 
 class ColumnBlock {
  public:
-  static constexpr std::size_t align = 64;                     // a cache line: SIMD loads never split
-  static constexpr std::size_t huge_page = std::size_t{2} << 20;
+  static constexpr std::size_t align = huge_pages::line;  // a cache line: SIMD loads never split
 
   // Bytes one column of n elements of T takes in a block (whole cache lines).
   template <class T>
@@ -48,14 +45,8 @@ class ColumnBlock {
   // Throws std::bad_alloc when the memory is not there.
   explicit ColumnBlock(std::size_t bytes) : size_(bytes) {
     if (bytes == 0) return;
-    const bool huge = bytes >= huge_page;
-    const std::size_t alignment = huge ? huge_page : align;
-    const std::size_t total = (bytes + alignment - 1) / alignment * alignment;  // whole huge pages
-    data_ = std::unique_ptr<std::byte[], detail::AlignedDelete>(
-        static_cast<std::byte*>(::operator new(total, std::align_val_t(alignment))), detail::AlignedDelete{alignment});
-#if defined(__linux__) && !defined(__EMSCRIPTEN__) && defined(MADV_HUGEPAGE)
-    if (huge) ::madvise(data_.get(), total, MADV_HUGEPAGE);  // advice only: failure leaves 4 KiB pages
-#endif
+    data_ = std::unique_ptr<std::byte[], detail::BlockDelete>(static_cast<std::byte*>(huge_pages::allocate(bytes)),
+                                                              detail::BlockDelete{bytes});
   }
 
   // The next column of n elements of T, uninitialised (T trivial: the block never constructs
@@ -74,7 +65,7 @@ class ColumnBlock {
   std::size_t size() const noexcept { return size_; }
 
  private:
-  std::unique_ptr<std::byte[], detail::AlignedDelete> data_;
+  std::unique_ptr<std::byte[], detail::BlockDelete> data_;
   std::size_t size_ = 0, used_ = 0;
 };
 

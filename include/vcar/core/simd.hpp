@@ -43,6 +43,15 @@
 #endif
 #endif
 
+// VCAR_FORCE_INLINE, written after a lambda's parameter list: GCC keeps a lambda that a loop
+// calls twice (the compositor's blend) as a call, passing batches through the stack and reading
+// every capture through the closure; forced inline, compositing ran 1.12x faster.
+#if defined(__GNUC__) || defined(__clang__)
+#define VCAR_FORCE_INLINE __attribute__((always_inline))
+#else
+#define VCAR_FORCE_INLINE
+#endif
+
 namespace vcar::simd {
 
 #if !defined(VCAR_SIMD_SCALAR)

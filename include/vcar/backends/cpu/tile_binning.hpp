@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "vcar/core/huge_pages.hpp"
 #include "vcar/core/parallel.hpp"
 #include "vcar/core/radix_sort.hpp"
 
@@ -36,7 +37,9 @@ static_assert(sizeof(PackedSplat) == 64, "one cache line per splat");
 // One entry per drawn Gaussian (index k into the request's drawn list); a splat whose tile
 // rectangle is empty is culled.
 struct ProjectedSplats {
-  std::vector<PackedSplat> splat;
+  // On huge pages where the OS has them: compositing reads the splats at random, one per entry,
+  // and at 1M (64 MB) 4 KiB pages missed the TLB on nearly every one.
+  std::vector<PackedSplat, HugePageAllocator<PackedSplat>> splat;
   std::vector<std::uint64_t> rect;  // touched tiles [tx0, tx1) x [ty0, ty1), 16 bits each (pack_rect)
   std::vector<float> depth;         // splat[k].depth again, packed: the depth sort reads only these
 

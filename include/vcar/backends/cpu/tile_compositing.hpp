@@ -118,7 +118,7 @@ void composite_tile(const PackedSplat* splat, const std::uint32_t* ids, std::int
       return simd::any((act > zero) && (sigma <= lane_sig_max));
     };
     // Front-to-back blend of the splat into batch `bit`, given sigma and alpha there.
-    auto blend = [&](int bit, const Lane& sigma, const Lane& alpha) {
+    auto blend = [&](int bit, const Lane& sigma, const Lane& alpha) VCAR_FORCE_INLINE {
       const int p = (bit / NB) * tile_size + (bit % NB) * L;
       const Lane act = Lane::load_aligned(st.active + p);
       const auto ok = (act > zero) && (sigma >= zero) && (alpha >= askip);
