@@ -516,10 +516,16 @@ TEST_CASE("expect_views skips candidates whose gate cannot open, with the same r
     p.rho = rho;
     vcar::BoundaryRefinement all(g, cand, p), skipping(g, cand, p);
     skipping.expect_views(6);
+    const std::size_t boxes = all.boxes_observed();
+    CHECK(boxes == (cand.size() + 63) / 64);
+    CHECK(skipping.boxes_observed() == boxes);
     for (int v = 0; v < 6; ++v) {
       all.add_view(cams[v], masks[v]);
       skipping.add_view(cams[v], masks[v]);
+      CHECK(all.boxes_observed() == boxes);
     }
+    // Boxes whose candidates all stopped being observed are left out of the later views.
+    if (rho > 0.f) CHECK(skipping.boxes_observed() < boxes);
     std::size_t observed_all = 0, observed_skipping = 0;
     for (int i = 0; i < n; ++i) {
       observed_all += all.n_vis(i);
