@@ -38,7 +38,7 @@ static_assert(sizeof(PackedSplat) == 64, "one cache line per splat");
 // rectangle is empty is culled.
 struct ProjectedSplats {
   // On huge pages where the OS has them: compositing reads the splats at random, one per entry,
-  // and at 1M (64 MB) 4 KiB pages missed the TLB on nearly every one.
+  // over 64 MB at 1M, and with 4 KiB pages it waited on their address translation.
   std::vector<PackedSplat, HugePageAllocator<PackedSplat>> splat;
   std::vector<std::uint64_t> rect;  // touched tiles [tx0, tx1) x [ty0, ty1), 16 bits each (pack_rect)
   std::vector<float> depth;         // splat[k].depth again, packed: the depth sort reads only these
