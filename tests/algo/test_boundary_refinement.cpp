@@ -10,6 +10,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "vcar/algo/boundary_refinement.hpp"
+#include "vcar/core/rle_mask.hpp"
 
 namespace {
 
@@ -651,6 +652,53 @@ TEST_CASE("defer_tracing and refine_deferred: the flagged candidates left untrac
   vcar::BoundaryRefinement deferring(f.scene, cand, p), next(f.scene, cand, p);
   deferring.defer_tracing();
   CHECK_THROWS_AS(next.carry(deferring), vcar::Error);  // partial minima cannot be carried
+}
+
+TEST_CASE("add_view with a run-length encoded mask equals add_view with its pixels, with tiles and without") {
+  const RingFixture f = ring_fixture();
+  std::vector<vcar::RleMask> runs;
+  for (const vcar::Mask& m : f.masks) runs.push_back(vcar::RleMask::encode(m));
+  vcar::AbrParams p;
+  p.rho = 0.3f;
+  // All 6000 candidates: the tiles pay and are built from the runs. 40 candidates: they do not,
+  // and the runs are decoded to pixels.
+  for (std::size_t count : {f.scene.size(), std::size_t{40}}) {
+    INFO(count << " candidates");
+    std::vector<vcar::Index> cand(count);
+    for (std::size_t i = 0; i < count; ++i) cand[i] = static_cast<vcar::Index>(i * 7 % f.scene.size());
+    vcar::BoundaryRefinement from_pixels(f.scene, cand, p), from_runs(f.scene, cand, p);
+    for (int v = 0; v < 6; ++v) {
+      from_pixels.add_view(f.cams[v], f.masks[v]);
+      from_runs.add_view(f.cams[v], runs[v]);
+    }
+    std::size_t overflowing = 0;
+    for (std::size_t k = 0; k < count; ++k) {
+      REQUIRE(from_runs.n_vis(k) == from_pixels.n_vis(k));
+      REQUIRE(from_runs.n_ovf(k) == from_pixels.n_ovf(k));
+      for (int d = 0; d < 3; ++d) REQUIRE(from_runs.min_factor(k, d) == from_pixels.min_factor(k, d));
+      overflowing += from_pixels.n_ovf(k) > 0;
+    }
+    CHECK(overflowing > 0);
+    const vcar::AbrResult a = from_pixels.finish(), b = from_runs.finish();
+    CHECK(a.flagged == b.flagged);
+    CHECK(a.log_scale == b.log_scale);
+    CHECK(a.axis_compressed == b.axis_compressed);
+    // refine_deferred takes either kind of mask.
+    const vcar::AbrResult c = vcar::refine_deferred(f.scene, cand, p, 6, [&](auto&& add) {
+      for (int v = 0; v < 6; ++v) add(f.cams[v], runs[v]);
+    });
+    CHECK(c.log_scale == a.log_scale);
+    CHECK(c.axis_compressed == a.axis_compressed);
+  }
+  // Runs of another size than the view, or that do not cover the image, name the view.
+  vcar::BoundaryRefinement abr(f.scene, {0, 1, 2});
+  vcar::RleMask wrong = runs[0];
+  wrong.width = 150;
+  CHECK_THROWS_WITH(abr.add_view(f.cams[0], wrong), Catch::Contains("v0"));
+  vcar::RleMask short_runs = runs[1];
+  short_runs.runs.back() -= 1;
+  CHECK_THROWS_WITH(abr.add_view(f.cams[1], short_runs), Catch::Contains("covers 19199 pixels"));
+  CHECK(abr.views() == 0);
 }
 
 TEST_CASE("bound_minimum: a bound from some of the views leaves every minimum as a refinement over all views finds it") {

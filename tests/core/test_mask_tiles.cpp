@@ -3,6 +3,7 @@
 #include <random>
 
 #include "vcar/core/mask_tiles.hpp"
+#include "vcar/core/rle_mask.hpp"
 
 using vcar::Mask;
 using vcar::MaskTiles;
@@ -61,6 +62,56 @@ TEST_CASE("MaskTiles: none and all are exact, mixed is conservative, tile-aligne
   CHECK(t.classify(-3, 4, 5, 40) == MaskTiles::foreground);  // clipped to the image
 }
 
+TEST_CASE("MaskTiles: the summary of a large mask (tile rows counted in parallel) is exact per tile, the same for any thread count") {
+  // 1001 x 701 (partial tiles at the right and bottom) is above parallel_pixels: its tile rows are
+  // packed and counted in parallel, then integrated.
+  const int W = 1001, H = 701;
+  REQUIRE(static_cast<std::size_t>(W) * H >= MaskTiles::parallel_pixels);
+  Mask m(W, H, 1, 0);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      const float dx = static_cast<float>(x - 480), dy = static_cast<float>(y - 330);
+      m(x, y) = dx * dx / (400.f * 400.f) + dy * dy / (250.f * 250.f) < 1.f ? 255 : 0;  // an ellipse
+    }
+  for (int y = 696; y < H; ++y)  // the partial bottom tile row (5 rows): foreground, then a gap
+    for (int x = 0; x < W; ++x) m(x, y) = x < 900 || x > 940 ? 255 : 0;
+  for (int y = 0; y < H; ++y) m(W - 1, y) = y % 97 ? 255 : 0;  // the partial right tile column (1 pixel)
+  const int saved = vcar::max_threads();
+  vcar::set_num_threads(1);
+  MaskTiles one;
+  one.build(m);
+  vcar::set_num_threads(std::max(2, saved));
+  MaskTiles many;
+  many.build(m);
+  vcar::set_num_threads(saved);
+  int answers[3] = {0, 0, 0};
+  for (int ty = 0; ty * 8 < H; ++ty)  // every tile, exactly
+    for (int tx = 0; tx * 8 < W; ++tx) {
+      const int want = brute(m, tx * 8, ty * 8, tx * 8 + 7, ty * 8 + 7);
+      CHECK(static_cast<int>(one.classify(tx * 8, ty * 8, tx * 8 + 7, ty * 8 + 7)) == want);
+      CHECK(static_cast<int>(many.classify(tx * 8, ty * 8, tx * 8 + 7, ty * 8 + 7)) == want);
+      ++answers[want];
+    }
+  CHECK(answers[0] > 0);
+  CHECK(answers[1] > 0);
+  CHECK(answers[2] > 0);
+  // Rectangles of whole tiles spanning many rows and columns: exact as well.
+  std::mt19937 rng(6);
+  std::uniform_int_distribution<int> TX(0, (W + 7) / 8 - 1), TY(0, (H + 7) / 8 - 1);
+  for (int k = 0; k < 300; ++k) {
+    int a = TX(rng), b = TX(rng), c = TY(rng), d = TY(rng);
+    if (a > b) std::swap(a, b);
+    if (c > d) std::swap(c, d);
+    const int want = brute(m, a * 8, c * 8, b * 8 + 7, d * 8 + 7);
+    CHECK(static_cast<int>(many.classify(a * 8, c * 8, b * 8 + 7, d * 8 + 7)) == want);
+  }
+  CHECK(many.classify(300, 250, 660, 410) == MaskTiles::foreground);  // inside the ellipse
+  CHECK(many.classify(0, 0, W - 1, H - 1) == MaskTiles::mixed);
+  CHECK(many.classify(0, 696, 895, H - 1) == MaskTiles::foreground);      // partial tiles, all foreground
+  CHECK(many.classify(W - 1, 8, W - 1, 95) == MaskTiles::foreground);
+  CHECK(many.classify(W - 8, H - 5, W - 1, H - 1) == MaskTiles::foreground);  // the corner tile
+}
+
 TEST_CASE("MaskTiles: packed bits, one 64-bit word per 8 x 8 tile, equal the mask and are 0 past its edges") {
   std::mt19937 rng(9);
   for (auto [W, H] : {std::pair{64, 48}, std::pair{37, 29}, std::pair{8, 1}, std::pair{1000, 700}}) {
@@ -92,6 +143,46 @@ TEST_CASE("MaskTiles: packed bits, one 64-bit word per 8 x 8 tile, equal the mas
   CHECK(t.words()[0] == 0);
   CHECK(t.words()[1] == 0);
   CHECK(t.words()[2] == 0);
+}
+
+TEST_CASE("MaskTiles built from a run-length encoded mask equals the one built from its pixels") {
+  std::mt19937 rng(12);
+  for (auto [W, H] : {std::pair{64, 48}, std::pair{37, 29}, std::pair{8, 1}, std::pair{1, 9}, std::pair{1001, 701}}) {
+    for (int pattern = 0; pattern < 4; ++pattern) {
+      Mask m(W, H, 1, 0);
+      for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+          const float dx = static_cast<float>(x) - 0.45f * static_cast<float>(W), dy = static_cast<float>(y) - 0.5f * static_cast<float>(H);
+          const bool blob = dx * dx / (0.16f * static_cast<float>(W * W)) + dy * dy / (0.1f * static_cast<float>(H * H)) < 1.f;
+          switch (pattern) {
+            case 0: m(x, y) = blob ? 255 : 0; break;                              // a blob
+            case 1: m(x, y) = rng() % 3 == 0 ? 9 : 0; break;                     // noise: short runs, any nonzero value
+            case 2: m(x, y) = 255; break;                                        // all foreground: one run over every row
+            case 3: m(x, y) = (blob != (x > W / 2)) || y == H - 1 ? 255 : 0; break;  // runs across row ends
+          }
+        }
+      MaskTiles from_pixels, from_runs;
+      from_pixels.build(m);
+      from_runs.build(vcar::RleMask::encode(m));
+      INFO(W << "x" << H << " pattern " << pattern);
+      REQUIRE(from_runs.tiles_x() == from_pixels.tiles_x());
+      const std::size_t words = static_cast<std::size_t>(from_pixels.tiles_x()) * static_cast<std::size_t>((H + 7) / 8);
+      CHECK(std::equal(from_runs.words(), from_runs.words() + words, from_pixels.words()));
+      std::uniform_int_distribution<int> X(-3, W + 2), Y(-3, H + 2);
+      int differ = 0;
+      for (int k = 0; k < 500; ++k) {
+        int x0 = X(rng), x1 = X(rng), y0 = Y(rng), y1 = Y(rng);
+        if (x0 > x1) std::swap(x0, x1);
+        if (y0 > y1) std::swap(y0, y1);
+        differ += from_runs.classify(x0, y0, x1, y1) != from_pixels.classify(x0, y0, x1, y1);
+      }
+      CHECK(differ == 0);
+    }
+  }
+  MaskTiles t;  // rebuilt in place, from a larger mask to an empty one
+  t.build(vcar::RleMask::encode(Mask(1001, 701, 1, 255)));
+  t.build(vcar::RleMask::encode(Mask(10, 10, 1, 0)));
+  CHECK(t.classify(0, 0, 9, 9) == MaskTiles::background);
 }
 
 TEST_CASE("MaskTiles::pixels: a batch of lookups equals the mask's bytes") {

@@ -48,6 +48,7 @@
 #include "vcar/core/morton_order.hpp"
 #include "vcar/core/parallel.hpp"
 #include "vcar/core/projection.hpp"
+#include "vcar/core/rle_mask.hpp"
 #include "vcar/core/rotation.hpp"
 
 namespace vcar {
@@ -385,13 +386,25 @@ class BoundaryRefinement {
   // a mask of another size than the view, or more views than the uint16 counters hold. `view`
   // names the view for the incremental updates below (default: the number of views added so far).
   void add_view(const Camera& cam, const Mask& mask) { add_view(cam, mask, static_cast<std::uint16_t>(views_)); }
-  void add_view(const Camera& cam, const Mask& mask, std::uint16_t view) {
+  void add_view(const Camera& cam, const Mask& mask, std::uint16_t view) { observe_added(cam, mask, view); }
+  // The same with the mask run-length encoded (what the pipeline keeps of its views): the
+  // mask's tiles are built from the runs, and the mask is decoded only when there are too few
+  // candidates for the tiles to pay. The same result as the decoded mask (tested). Also throws
+  // for runs that do not cover the image exactly.
+  void add_view(const Camera& cam, const RleMask& mask) { add_view(cam, mask, static_cast<std::uint16_t>(views_)); }
+  void add_view(const Camera& cam, const RleMask& mask, std::uint16_t view) { observe_added(cam, mask, view); }
+
+ private:
+  template <class AnyMask>
+  void observe_added(const Camera& cam, const AnyMask& mask, std::uint16_t view) {
     check_view(cam, mask, view);
     if (expected_ && views_ >= expected_)
       throw Error("more views than expect_views announced (" + std::to_string(expected_) + ")", "view '" + cam.name + "'");
     enter_view(cam);
-    const bool tiles = tiles_pay(size(), mask);
+    const bool tiles = tiles_pay(size(), static_cast<std::size_t>(mask.width) * static_cast<std::size_t>(mask.height));
+    const Mask* pixels = nullptr;  // the mask's bytes, when no tiles
     if (tiles) tiles_.build(mask);
+    else pixels = &decoded(mask);
     // With expect_views: this view and those after it; a candidate whose gate cannot open even
     // if it overflows in all of them is not observed any more.
     const std::size_t remaining = expected_ ? expected_ - views_ + 1 : 0;
@@ -404,21 +417,24 @@ class BoundaryRefinement {
     const std::vector<std::uint32_t>* boxes = expected_ ? &live_boxes_ : nullptr;
     std::uint8_t* idle = expected_ ? idle_.data() : nullptr;
     if (!defer_) {
-      observe_view(cam, mask, tiles, want, [&](std::size_t k, const AbrObservation& obs) { add(k, obs, view); }, boxes,
+      observe_view(cam, pixels, tiles, want, [&](std::size_t k, const AbrObservation& obs) { add(k, obs, view); }, boxes,
                    Always{}, idle);
     } else {
       // defer_tracing: an overflowing endpoint is traced only while the slot's overflow ratio,
       // this view counted as overflowing, is above rho; the slots left untraced are marked.
       const float rho = params_.rho;
       auto trace = [&](std::size_t k) { return static_cast<float>(n_ovf_[k] + 1) > rho * static_cast<float>(n_vis_[k] + 1); };
-      observe_view(cam, mask, tiles, want, [&](std::size_t k, const AbrObservation& obs) {
+      observe_view(cam, pixels, tiles, want, [&](std::size_t k, const AbrObservation& obs) {
         if (obs.overflow && !trace(k)) untraced_[k] = 1;  // before add(): the counts observe_view read
         add(k, obs, view);
       }, boxes, trace, idle);
     }
     if (expected_) std::erase_if(live_boxes_, [&](std::uint32_t c) { return idle_[c] != 0; });
   }
+  const Mask& decoded(const Mask& mask) { return mask; }
+  const Mask& decoded(const RleMask& mask) { return decoder_.decode(mask); }
 
+ public:
   // Beyond the paper (same result, less work): with defer_tracing, add_view traces a candidate's
   // overflowing endpoints (B.3, the march and Eq. 11-13) only while its overflow ratio, the view
   // counted as overflowing, is above rho, i.e. while it looks bound to be flagged; the counts
@@ -528,7 +544,7 @@ class BoundaryRefinement {
       if (views_ == 0) throw Error("change_view takes back a view that was never added", "view '" + cam.name + "'");
       --views_;
       tiles_.build(*old_mask);
-      observe_view(cam, *old_mask, true, is_carried, [&](std::size_t k, const AbrObservation& obs) {
+      observe_view(cam, old_mask, true, is_carried, [&](std::size_t k, const AbrObservation& obs) {
         --n_vis_[k];
         if (obs.overflow) --n_ovf_[k];
         for (int d = 0; d < 3; ++d)
@@ -539,7 +555,7 @@ class BoundaryRefinement {
       check_view(cam, *new_mask, view);
       enter_view(cam);
       tiles_.build(*new_mask);
-      observe_view(cam, *new_mask, true, is_carried, [&](std::size_t k, const AbrObservation& obs) {
+      observe_view(cam, new_mask, true, is_carried, [&](std::size_t k, const AbrObservation& obs) {
         add(k, obs, view);
       });
     }
@@ -560,9 +576,9 @@ class BoundaryRefinement {
       completing_ = true;
     }
     if (wanted_ == 0) return;
-    const bool tiles = tiles_pay(wanted_, mask);
+    const bool tiles = tiles_pay(wanted_, mask.pixels());
     if (tiles) tiles_.build(mask);
-    observe_view(cam, mask, tiles, [&](std::size_t k) { return mode_[k] != carried; },
+    observe_view(cam, &mask, tiles, [&](std::size_t k) { return mode_[k] != carried; },
                  [&](std::size_t k, const AbrObservation& obs) {
                    if (mode_[k] == fresh) return add(k, obs, view);
                    if (obs.overflow) min_into(k, obs, view);  // stale: its counts are already right
@@ -645,7 +661,7 @@ class BoundaryRefinement {
   static constexpr std::uint16_t no_view = std::numeric_limits<std::uint16_t>::max();
   // Whether building the mask tiles for `observed` candidates pays: under one candidate per 256
   // pixels they are observed one by one on the mask itself (the same result either way).
-  static bool tiles_pay(std::size_t observed, const Mask& mask) { return observed * 256 >= mask.pixels(); }
+  static bool tiles_pay(std::size_t observed, std::size_t pixels) { return observed * 256 >= pixels; }
   struct Always {  // trace every slot (a type, not a function pointer: inlined per lane)
     bool operator()(std::size_t) const { return true; }
   };
@@ -662,6 +678,19 @@ class BoundaryRefinement {
       throw Error("mask is " + std::to_string(mask.width) + "x" + std::to_string(mask.height) + "x" +
                   std::to_string(mask.channels) + ", the view is " + std::to_string(cam.width) + "x" +
                   std::to_string(cam.height) + "x1", where);
+    if (view == no_view) throw Error("view ids go up to 65534", where);
+  }
+  void check_view(const Camera& cam, const RleMask& mask, std::uint16_t view) const {
+    const std::string where = "view '" + cam.name + "'";
+    cam.validate();
+    if (mask.width != cam.width || mask.height != cam.height)
+      throw Error("mask is " + std::to_string(mask.width) + "x" + std::to_string(mask.height) + ", the view is " +
+                  std::to_string(cam.width) + "x" + std::to_string(cam.height), where);
+    std::size_t covered = 0;
+    for (std::uint32_t run : mask.runs) covered += run;
+    if (covered != static_cast<std::size_t>(mask.width) * static_cast<std::size_t>(mask.height))
+      throw Error("run-length mask covers " + std::to_string(covered) + " pixels, not its " + std::to_string(mask.width) +
+                  "x" + std::to_string(mask.height), where);
     if (view == no_view) throw Error("view ids go up to 65534", where);
   }
 
@@ -706,12 +735,13 @@ class BoundaryRefinement {
   // One view: apply(k, obs) for every slot k with want(k) whose centre is eligible (B.1), obs as
   // observe_gaussian gives it (abr_geometry and trace_overflow simd::width slots at a time).
   // With `tiles` (tiles_ built from this mask) whole chunks that the mask's tiles decide skip
-  // the covariance (same counts and minima).
+  // the covariance (same counts and minima); `mask`, the mask's pixels, is read only without
+  // tiles (with tiles it may be null).
   // `boxes` (optional) lists the chunk boxes that hold a wanted slot; the others are skipped.
   // `trace(k)` false: apply needs slot k's counts only (no endpoint is traced, obs.f stays +inf).
   // `idle` (optional, one byte per chunk box): set to 1 for each box visited without a wanted slot.
   template <class Want, class Apply, class Trace = Always>
-  void observe_view(const Camera& cam, const Mask& mask, bool tiles, Want want, Apply apply,
+  void observe_view(const Camera& cam, const Mask* mask, bool tiles, Want want, Apply apply,
                     const std::vector<std::uint32_t>* boxes = nullptr, Trace trace = {},
                     std::uint8_t* idle = nullptr) {
     const AbrParams p = params_;
@@ -767,8 +797,8 @@ class BoundaryRefinement {
             lane_tests(g, centre, a.outside);
           } else {
             for (std::size_t l = 0; l < lanes; ++l) {
-              centre[l] = g.front[l] > 0.f && g.det[l] > 0.f && mask_at(mask, g.mx[l], g.my[l]);
-              a.outside[l] = centre[l] ? outside_endpoints(mask, g, l) : 0;
+              centre[l] = g.front[l] > 0.f && g.det[l] > 0.f && mask_at(*mask, g.mx[l], g.my[l]);
+              a.outside[l] = centre[l] ? outside_endpoints(*mask, g, l) : 0;
             }
           }
           // A lane whose centre is eligible and whose endpoints all lie on foreground is
@@ -788,7 +818,7 @@ class BoundaryRefinement {
           }
           if (traced) {
             if (tiles) trace_overflow(tiles_, g, traced, p, a);
-            else trace_overflow(mask, g, traced, p, a);
+            else trace_overflow(*mask, g, traced, p, a);
           }
           for (unsigned m = overflowing; m; m &= m - 1) {
             const auto l = static_cast<std::size_t>(std::countr_zero(m));
@@ -878,6 +908,7 @@ class BoundaryRefinement {
   std::array<std::span<float>, 3> s_;        // candidate scales exp(log s)
   std::vector<std::array<float, 7>> box_;    // per kBox slots: centre box lo, hi, max max_d s_d^2
   MaskTiles tiles_;                          // the current view's mask in tiles
+  MaskDecoder decoder_;                      // a run-length encoded view's pixels, when no tiles
   std::array<std::span<float>, 3> log_s_;    // candidate log-scales before refinement (by slot)
   std::array<std::span<float>, 3> f_;        // running minimum candidate factor per axis
   std::span<std::uint16_t> n_vis_, n_ovf_;   // B.3 counts
@@ -901,7 +932,7 @@ class BoundaryRefinement {
 // result equals one BoundaryRefinement that saw every view (bit for bit: the counts are exact in
 // both, and each candidate's minima come from a refinement that traced all its overflowing
 // views, or from the first pass's traced views). `for_each_view(add)` calls add(camera, mask)
-// once per view, `views` of them, in the same order each time; it is called once, or twice when
+// (a Mask or an RleMask) once per view, `views` of them, in the same order each time; it is called once, or twice when
 // some flagged candidate was left untraced.
 template <class ForEachView>
 AbrResult refine_deferred(const GaussianScene& scene, const std::vector<Index>& candidates, const AbrParams& params,
@@ -909,7 +940,7 @@ AbrResult refine_deferred(const GaussianScene& scene, const std::vector<Index>& 
   BoundaryRefinement abr(scene, candidates, params);
   abr.expect_views(views);  // candidates whose gate can no longer open are skipped (same result)
   abr.defer_tracing();
-  for_each_view([&](const Camera& cam, const Mask& mask) { abr.add_view(cam, mask); });
+  for_each_view([&](const Camera& cam, const auto& mask) { abr.add_view(cam, mask); });  // a Mask or an RleMask
   AbrResult a = abr.finish();
   const std::vector<std::size_t> again = abr.flagged_untraced();
   if (again.empty()) return a;
@@ -919,7 +950,7 @@ AbrResult refine_deferred(const GaussianScene& scene, const std::vector<Index>& 
   exact.expect_views(views);
   for (std::size_t i = 0; i < again.size(); ++i)  // the first pass's minima bound the exact ones
     exact.bound_minimum(i, {abr.min_factor(again[i], 0), abr.min_factor(again[i], 1), abr.min_factor(again[i], 2)});
-  for_each_view([&](const Camera& cam, const Mask& mask) { exact.add_view(cam, mask); });
+  for_each_view([&](const Camera& cam, const auto& mask) { exact.add_view(cam, mask); });
   const AbrResult b = exact.finish();
   for (std::size_t i = 0; i < again.size(); ++i) {
     for (int d = 0; d < 3; ++d) a.log_scale[d][again[i]] = b.log_scale[d][i];

@@ -372,10 +372,9 @@ inline LogScales refine_boundaries(const GaussianScene& scene, const std::vector
   const auto ta = Clock::now();
   std::size_t views = 0;
   for (const auto& m : train_masks) views += m.has_value();
-  MaskDecoder decoder;
   AbrResult a = refine_deferred(scene, selected, params.abr(), views, [&](auto&& add) {
-    for (std::size_t j = 0; j < train_masks.size(); ++j)
-      if (train_masks[j]) add(train_cameras[j], decoder.decode(*train_masks[j]));
+    for (std::size_t j = 0; j < train_masks.size(); ++j)  // run-length encoded: ABR builds its tiles from the runs
+      if (train_masks[j]) add(train_cameras[j], *train_masks[j]);
   });
   diag.mask_store_bytes = 0;
   for (const auto& m : train_masks)

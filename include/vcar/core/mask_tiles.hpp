@@ -14,10 +14,12 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
+#include <utility>
 #include <vector>
 
 #include "vcar/core/image.hpp"
 #include "vcar/core/parallel.hpp"
+#include "vcar/core/rle_mask.hpp"
 #include "vcar/core/simd.hpp"
 
 namespace vcar {
@@ -62,11 +64,68 @@ public:
         }
       }
     };
+    const std::size_t stride = static_cast<std::size_t>(tw_) + 1;
+    any_.resize(stride * (static_cast<std::size_t>(th_) + 1));
+    all_.resize(any_.size());
+    const auto pack_and_count = [&](std::int64_t ty) {
+      pack_tile_row(ty);
+      count_tile_row(static_cast<int>(ty));
+    };
     if (m.pixels() >= parallel_pixels)
+      parallel_for(th_, pack_and_count);
+    else
+      for (int ty = 0; ty < th_; ++ty) pack_and_count(ty);
+    integrate_rows();
+  }
+
+  // Rebuilds for the run-length encoded mask `r`, without decoding it: each tile row ORs in the
+  // bits of the foreground runs that cross its pixel rows (tile rows in parallel for large
+  // masks), in time that grows with the foreground's tiles rather than with the pixels.
+  void build(const RleMask& r) {
+    width_ = r.width;
+    height_ = r.height;
+    tw_ = (r.width + tile - 1) / tile;
+    th_ = (r.height + tile - 1) / tile;
+    words_.resize(static_cast<std::size_t>(tw_) * th_);
+    const std::size_t W = static_cast<std::size_t>(width_);
+    // first_run_[ty]: the first run that ends past the first pixel of tile row ty, and where it starts.
+    first_run_.resize(static_cast<std::size_t>(th_));
+    {
+      std::size_t at = 0, i = 0;
+      for (int ty = 0; ty < th_; ++ty) {
+        const std::size_t row_begin = static_cast<std::size_t>(ty) * tile * W;
+        while (i < r.runs.size() && at + r.runs[i] <= row_begin) at += r.runs[i++];
+        first_run_[static_cast<std::size_t>(ty)] = {i, at};
+      }
+    }
+    const auto pack_tile_row = [&](std::int64_t t) {  // writes tile row ty's words only
+      const int ty = static_cast<int>(t);
+      std::uint64_t* out = words_.data() + static_cast<std::size_t>(ty) * tw_;
+      std::fill(out, out + tw_, std::uint64_t{0});
+      const std::size_t row_begin = static_cast<std::size_t>(ty) * tile * W;
+      const std::size_t row_end = std::min(static_cast<std::size_t>(height_), static_cast<std::size_t>(ty + 1) * tile) * W;
+      auto [i, at] = first_run_[static_cast<std::size_t>(ty)];
+      for (; i < r.runs.size() && at < row_end; at += r.runs[i++]) {
+        if (i % 2 == 0 || r.runs[i] == 0) continue;  // background runs: even positions
+        // The run's pixels in this tile row, one image row at a time.
+        std::size_t b = std::max(at, row_begin);
+        const std::size_t e = std::min(at + r.runs[i], row_end);
+        while (b < e) {
+          const std::size_t y = b / W, x0 = b - y * W, x1 = std::min(W, x0 + (e - b));
+          set_bits(out, static_cast<int>(x0), static_cast<int>(x1), 8 * static_cast<int>(y % tile));
+          b += x1 - x0;
+        }
+      }
+      count_tile_row(ty);
+    };
+    const std::size_t stride = static_cast<std::size_t>(tw_) + 1;
+    any_.resize(stride * (static_cast<std::size_t>(th_) + 1));
+    all_.resize(any_.size());
+    if (static_cast<std::size_t>(width_) * height_ >= parallel_pixels)
       parallel_for(th_, pack_tile_row);
     else
       for (int ty = 0; ty < th_; ++ty) pack_tile_row(ty);
-    summarise();
+    integrate_rows();
   }
 
   int width() const noexcept { return width_; }
@@ -105,35 +164,67 @@ public:
   }
 
 private:
-  // The integral images of "some foreground" and "all foreground" over the tile grid.
-  void summarise() {
+  // The summary, in two steps. count_tile_row(ty) writes row ty + 1 of both integral images as
+  // counts along tile row ty only (the packer's thread, right after packing it; column 0 is 0);
+  // integrate_rows() then adds each row to the one below it, which makes them the integral
+  // images of "some foreground" and "all foreground" over the tile grid (row 0 is 0).
+  void count_tile_row(int ty) {
     const std::size_t stride = static_cast<std::size_t>(tw_) + 1;
-    any_.resize(stride * (static_cast<std::size_t>(th_) + 1));  // row and column 0 zeroed, the rest written
-    all_.resize(any_.size());
+    const int rest_x = width_ - (tw_ - 1) * tile, rest_y = height_ - (th_ - 1) * tile;
+    const int rows = ty + 1 < th_ ? tile : rest_y;
+    const std::uint64_t* w = words_.data() + static_cast<std::size_t>(ty) * tw_;
+    std::uint32_t* any = any_.data() + (static_cast<std::size_t>(ty) + 1) * stride;
+    std::uint32_t* all = all_.data() + (static_cast<std::size_t>(ty) + 1) * stride;
+    // A tile's in-image pixels: the low `cols` bits in each of its first `rows` bytes.
+    const std::uint64_t row_bytes = 0x0101010101010101ULL >> (8 * (tile - rows));
+    const std::uint64_t full = 0xffULL * row_bytes, last = ((1ULL << rest_x) - 1) * row_bytes;
+    std::uint32_t run_any = 0, run_all = 0;
+    any[0] = all[0] = 0;
+    for (int tx = 0; tx + 1 < tw_; ++tx) {
+      run_any += w[tx] != 0;
+      run_all += w[tx] == full;
+      any[tx + 1] = run_any;
+      all[tx + 1] = run_all;
+    }
+    any[tw_] = run_any + (w[tw_ - 1] != 0);  // the last tile, perhaps partial
+    all[tw_] = run_all + (w[tw_ - 1] == last);
+  }
+  // Sets pixels [x0, x1) of one image row in a row of tile words, `shift` = 8 * (y % 8).
+  static void set_bits(std::uint64_t* out, int x0, int x1, int shift) {
+    const int t0 = x0 / tile, t1 = (x1 - 1) / tile;  // the first and last tile, x0 < x1
+    const auto bits = [&](int lo, int hi) { return ((0xffULL >> (tile - (hi - lo))) << lo) << shift; };
+    if (t0 == t1) {
+      out[t0] |= bits(x0 - t0 * tile, x1 - t0 * tile);
+      return;
+    }
+    out[t0] |= bits(x0 - t0 * tile, tile);
+    const std::uint64_t whole = 0xffULL << shift;
+    for (int tx = t0 + 1; tx < t1; ++tx) out[tx] |= whole;
+    out[t1] |= bits(0, x1 - t1 * tile);
+  }
+  void integrate_rows() {
+    const std::size_t stride = static_cast<std::size_t>(tw_) + 1;
     std::fill(any_.begin(), any_.begin() + static_cast<std::ptrdiff_t>(stride), 0u);
     std::fill(all_.begin(), all_.begin() + static_cast<std::ptrdiff_t>(stride), 0u);
-    const int rest_x = width_ - (tw_ - 1) * tile, rest_y = height_ - (th_ - 1) * tile;
-    for (int ty = 0; ty < th_; ++ty) {
-      const int rows = ty + 1 < th_ ? tile : rest_y;
-      std::uint32_t run_any = 0, run_all = 0;
-      any_[(static_cast<std::size_t>(ty) + 1) * stride] = all_[(static_cast<std::size_t>(ty) + 1) * stride] = 0;
-      for (int tx = 0; tx < tw_; ++tx) {
-        const int cols = tx + 1 < tw_ ? tile : rest_x;
-        // The tile's in-image pixels: `cols` low bits in each of its first `rows` bytes.
-        const std::uint64_t full = ((1ULL << cols) - 1) * (0x0101010101010101ULL >> (8 * (tile - rows)));
-        const std::uint64_t w = words_[static_cast<std::size_t>(ty) * tw_ + tx];
-        run_any += w != 0;
-        run_all += w == full;
-        const std::size_t at = (static_cast<std::size_t>(ty) + 1) * stride + tx + 1;
-        any_[at] = any_[at - stride] + run_any;
-        all_[at] = all_[at - stride] + run_all;
-      }
+    for (std::size_t at = stride; at < any_.size(); at += stride) {
+      add_row(any_.data() + at, any_.data() + at - stride, stride);
+      add_row(all_.data() + at, all_.data() + at - stride, stride);
     }
+  }
+  static void add_row(std::uint32_t* row, const std::uint32_t* above, std::size_t count) {
+    using BI = simd::batch<std::int32_t>;  // counts < 2^31: the same sums
+    auto* r = reinterpret_cast<std::int32_t*>(row);
+    const auto* a = reinterpret_cast<const std::int32_t*>(above);
+    std::size_t x = 0;
+    for (; x + simd::width <= count; x += simd::width)
+      (BI::load_unaligned(r + x) + BI::load_unaligned(a + x)).store_unaligned(r + x);
+    for (; x < count; ++x) row[x] += above[x];
   }
 
   int width_ = 0, height_ = 0, tw_ = 0, th_ = 0;
   std::vector<std::uint64_t> words_;       // the packed tiles
   std::vector<std::uint32_t> any_, all_;   // integral counts over the tile grid
+  std::vector<std::pair<std::size_t, std::size_t>> first_run_;  // build(RleMask): per tile row, run and its start
 };
 
 // mask_at (core/image.hpp) for a batch of points: per lane 1 where (u, v) lies inside the image
