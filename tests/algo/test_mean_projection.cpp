@@ -1,6 +1,9 @@
 #include <catch2/catch.hpp>
 
+#include <array>
+#include <cmath>
 #include <random>
+#include <vector>
 
 #include "vcar/algo/mean_projection.hpp"
 
@@ -82,4 +85,47 @@ TEST_CASE("project_boxes answers each lane as project_box does for that lane's b
       if (!std::isfinite(boxes[k][4])) CHECK(got.visibility == BoxView::partial);
     }
   }
+}
+
+TEST_CASE("mean_box: the least and greatest means per axis; a non-finite mean makes lo NaN, NaN is left out of hi") {
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<float> U(-50.f, 50.f);
+  // Brute force, one mean at a time.
+  auto brute = [](const std::vector<float>* c, std::size_t b, std::size_t e) {
+    std::array<float, 6> want{};
+    for (int d = 0; d < 3; ++d) {
+      bool finite = true;
+      float lo = INFINITY, hi = -INFINITY;
+      for (std::size_t j = b; j < e; ++j) {
+        const float v = c[d][j];
+        finite = finite && std::isfinite(v);
+        if (!std::isnan(v)) lo = std::min(lo, v), hi = std::max(hi, v);
+      }
+      want[d] = finite ? lo : NAN;
+      want[3 + d] = hi;
+    }
+    return want;
+  };
+  int nonfinite_boxes = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const std::size_t n = 1 + rng() % 300;
+    std::vector<float> c[3];
+    for (auto& col : c) {
+      col.resize(n);
+      for (float& v : col) v = U(rng);
+    }
+    if (trial % 3 == 1) c[rng() % 3][rng() % n] = NAN;
+    if (trial % 5 == 2) c[rng() % 3][rng() % n] = trial % 2 ? INFINITY : -INFINITY;
+    if (trial % 7 == 3) std::fill(c[1].begin(), c[1].end(), NAN);  // no mean is a number on y
+    const std::size_t b = rng() % n, e = b + rng() % (n - b + 1);
+    const auto got = vcar::detail::mean_box(c[0].data(), c[1].data(), c[2].data(), b, e);
+    const auto want = brute(c, b, e);
+    INFO("trial " << trial << " [" << b << ", " << e << ")");
+    for (int k = 0; k < 6; ++k) {
+      if (std::isnan(want[k])) CHECK(std::isnan(got[k]));
+      else CHECK(got[k] == want[k]);
+    }
+    nonfinite_boxes += std::isnan(want[0]) || std::isnan(want[1]) || std::isnan(want[2]);
+  }
+  CHECK(nonfinite_boxes > 20);
 }

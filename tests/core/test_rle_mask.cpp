@@ -4,6 +4,7 @@
 #include <random>
 #include <vector>
 
+#include "vcar/core/parallel.hpp"
 #include "vcar/core/rle_mask.hpp"
 
 TEST_CASE("run-length masks decode to the same foreground") {
@@ -67,6 +68,31 @@ TEST_CASE("run lengths equal the pixel-by-pixel runs across 64-pixel words") {
   CHECK(vcar::RleMask::encode(all).runs == std::vector<std::uint32_t>{0, 128});
   CHECK(vcar::RleMask::encode(none).runs == std::vector<std::uint32_t>{128});
   CHECK(vcar::RleMask::encode(empty).runs == std::vector<std::uint32_t>{0});
+}
+
+TEST_CASE("large masks encode in blocks in parallel: the same runs as pixel by pixel, for any thread count") {
+  std::mt19937 rng(13);
+  // 1003 x 701 is above parallel_pixels; runs cross the blocks' borders (multiples of 2^16
+  // pixels), and a run may start exactly at one.
+  vcar::Mask m(1003, 701, 1);
+  REQUIRE(m.data.size() >= vcar::RleMask::parallel_pixels);
+  bool fg = false;
+  for (std::size_t k = 0; k < m.data.size();) {
+    const std::size_t run = 1 + rng() % (k < 300000 ? 40 : 90000);  // short runs, then runs longer than a block
+    for (std::size_t i = 0; i < run && k < m.data.size(); ++i, ++k) m.data[k] = fg ? 200 : 0;
+    fg = !fg;
+  }
+  m.data[std::size_t{1} << 16] = m.data[(std::size_t{1} << 16) - 1] ? 0 : 255;  // a boundary on a block's first pixel
+  const int saved = vcar::max_threads();
+  vcar::set_num_threads(1);
+  const vcar::RleMask one = vcar::RleMask::encode(m);
+  vcar::set_num_threads(std::max(2, saved));
+  const vcar::RleMask many = vcar::RleMask::encode(m);
+  vcar::set_num_threads(saved);
+  CHECK(one.runs == runs_one_by_one(m));
+  CHECK(many.runs == one.runs);
+  std::fill(m.data.begin(), m.data.end(), 255);  // one run through every block
+  CHECK(vcar::RleMask::encode(m).runs == std::vector<std::uint32_t>{0, static_cast<std::uint32_t>(m.data.size())});
 }
 
 TEST_CASE("MaskDecoder decodes a sequence of masks as RleMask::decode does, rewriting only foreground runs") {

@@ -264,16 +264,43 @@ inline BoxView project_box(const MeanProjection& w, const float lo[3], const flo
 
 // Bounding box (lo x, y, z, hi x, y, z) of the means [begin, end) of SoA columns; a non-finite
 // mean makes the box non-finite, which project_box answers with "partial" (per-mean test).
+// Per axis: lo is NaN when some mean is not finite, else the least; hi is the greatest mean that
+// is not NaN (-inf when none). simd::width means at a time, the rest one by one.
 inline std::array<float, 6> mean_box(const float* x, const float* y, const float* z, std::size_t begin,
                                      std::size_t end) {
+  using BF = simd::batch<float>;
+  constexpr std::size_t L = simd::width;
   const float* c[3] = {x, y, z};
-  std::array<float, 6> b{INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
-  for (std::size_t j = begin; j < end; ++j)
-    for (int d = 0; d < 3; ++d) {
-      if (!std::isfinite(c[d][j])) b[d] = NAN;  // std::min keeps a NaN first argument
-      b[d] = std::min(b[d], c[d][j]);
-      b[3 + d] = std::max(b[3 + d], c[d][j]);
+  std::array<float, 6> b{};
+  for (int d = 0; d < 3; ++d) {
+    BF lo(INFINITY), hi(-INFINITY), finite(0.f);  // finite: v - v stays 0 while every v is finite
+    std::size_t j = begin;
+    for (; j + L <= end; j += L) {
+      const BF v = BF::load_unaligned(c[d] + j);
+      lo = simd::min(lo, v);  // meaningless once a lane saw NaN, and then not used
+      hi = simd::max(hi, simd::select(v >= BF(-INFINITY), v, BF(-INFINITY)));  // NaN: -inf
+      finite = finite + (v - v);
     }
+    alignas(64) float lo_l[L], hi_l[L], finite_l[L];
+    lo.store_aligned(lo_l);
+    hi.store_aligned(hi_l);
+    finite.store_aligned(finite_l);
+    float l = INFINITY, h = -INFINITY;
+    bool all_finite = true;
+    for (std::size_t i = 0; i < L; ++i) {
+      l = std::min(l, lo_l[i]);
+      h = std::max(h, hi_l[i]);
+      all_finite = all_finite && finite_l[i] == 0.f;
+    }
+    for (; j < end; ++j) {
+      const float v = c[d][j];
+      all_finite = all_finite && std::isfinite(v);
+      l = std::min(l, v);
+      if (v == v) h = std::max(h, v);
+    }
+    b[d] = all_finite ? l : NAN;
+    b[3 + d] = h;
+  }
   return b;
 }
 
