@@ -183,6 +183,13 @@ TEST_CASE("MaskTiles built from a run-length encoded mask equals the one built f
   t.build(vcar::RleMask::encode(Mask(1001, 701, 1, 255)));
   t.build(vcar::RleMask::encode(Mask(10, 10, 1, 0)));
   CHECK(t.classify(0, 0, 9, 9) == MaskTiles::background);
+  for (auto [W, H] : {std::pair{0, 5}, std::pair{5, 0}, std::pair{0, 0}}) {  // no pixels: background everywhere
+    const Mask none(W, H, 1, 0);
+    t.build(none);
+    CHECK(t.classify(0, 0, 4, 4) == MaskTiles::background);
+    t.build(vcar::RleMask::encode(none));
+    CHECK(t.classify(0, 0, 4, 4) == MaskTiles::background);
+  }
 }
 
 TEST_CASE("MaskTiles::pixels: a batch of lookups equals the mask's bytes") {

@@ -170,6 +170,10 @@ private:
   // images of "some foreground" and "all foreground" over the tile grid (row 0 is 0).
   void count_tile_row(int ty) {
     const std::size_t stride = static_cast<std::size_t>(tw_) + 1;
+    if (tw_ == 0) {  // an image 0 pixels wide: the row is its column 0
+      any_[(static_cast<std::size_t>(ty) + 1) * stride] = all_[(static_cast<std::size_t>(ty) + 1) * stride] = 0;
+      return;
+    }
     const int rest_x = width_ - (tw_ - 1) * tile, rest_y = height_ - (th_ - 1) * tile;
     const int rows = ty + 1 < th_ ? tile : rest_y;
     const std::uint64_t* w = words_.data() + static_cast<std::size_t>(ty) * tw_;
