@@ -841,3 +841,131 @@ TEST_CASE("trace_overflow: the lanes traced together equal B.3 written endpoint 
   CHECK(cut > 20);
   CHECK(mismatches == 0);
 }
+
+namespace {
+
+// 40 views on a ring (more than two groups of add_views), each mask a disc whose radius and
+// centre move from view to view, so that candidates overflow in some views and not in others.
+struct ManyViews {
+  std::vector<vcar::Camera> cams;
+  std::vector<vcar::Mask> masks;
+};
+ManyViews many_views(int count, int w, int h) {
+  ManyViews m;
+  const vcar::Intrinsics k{w, h, 150.f * w / 160.f, 150.f * w / 160.f, w / 2.f, h / 2.f};
+  for (int v = 0; v < count; ++v) {
+    const float a = 6.2832f * static_cast<float>(v) / static_cast<float>(count);
+    m.cams.push_back(vcar::Camera::look_at({3.5f * std::cos(a), 0.4f + 0.02f * v, 3.5f * std::sin(a)}, {0, 0, 0},
+                                           {0, 1, 0}, k, "v" + std::to_string(v)));
+    vcar::Mask mask(w, h, 1, 0);
+    const float cx = w / 2.f + static_cast<float>(v % 5 - 2) * w / 40.f, r = w * (0.2f + 0.006f * static_cast<float>(v % 9));
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) mask(x, y) = (x - cx) * (x - cx) + (y - h / 2.f) * (y - h / 2.f) < r * r ? 255 : 0;
+    m.masks.push_back(mask);
+  }
+  return m;
+}
+
+// Every candidate's counts and minima, and finish(), of two refinements are the same.
+void require_same_state(const vcar::BoundaryRefinement& a, const vcar::BoundaryRefinement& b) {
+  REQUIRE(a.views() == b.views());
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    REQUIRE(a.n_vis(k) == b.n_vis(k));
+    REQUIRE(a.n_ovf(k) == b.n_ovf(k));
+    for (int d = 0; d < 3; ++d) REQUIRE(a.min_factor(k, d) == b.min_factor(k, d));
+  }
+  const vcar::AbrResult x = a.finish(), y = b.finish();
+  CHECK(x.flagged == y.flagged);
+  CHECK(x.log_scale == y.log_scale);
+  CHECK(x.axis_compressed == y.axis_compressed);
+}
+
+}  // namespace
+
+TEST_CASE("add_views, candidates outside and views inside, equals add_view view by view") {
+  const ManyViews mv = many_views(40, 160, 120);
+  static_assert(vcar::BoundaryRefinement::kViewGroup < 40);
+  const vcar::GaussianScene g = random_gaussians(6000, 11, -4.f, -2.f);
+  std::vector<vcar::Index> cand(g.size());
+  for (std::size_t i = 0; i < cand.size(); ++i) cand[i] = static_cast<vcar::Index>(i);
+  std::vector<vcar::RleMask> runs;
+  for (const vcar::Mask& m : mv.masks) runs.push_back(vcar::RleMask::encode(m));
+  vcar::AbrParams p;
+  p.rho = 0.3f;
+  const int saved = vcar::max_threads();
+  // Plain, skipping (expect_views), and skipping with deferred tracing (refine_deferred's first pass).
+  for (int mode = 0; mode < 3; ++mode) {
+    for (int threads : {1, std::max(2, saved)}) {
+      INFO("mode " << mode << ", " << threads << " threads");
+      vcar::set_num_threads(threads);
+      auto make = [&] {
+        vcar::BoundaryRefinement r(g, cand, p);
+        if (mode >= 1) r.expect_views(mv.cams.size());
+        if (mode == 2) r.defer_tracing();
+        return r;
+      };
+      vcar::BoundaryRefinement one_by_one = make(), grouped = make(), grouped_runs = make();
+      for (std::size_t v = 0; v < mv.cams.size(); ++v) one_by_one.add_view(mv.cams[v], mv.masks[v]);
+      grouped.add_views([&](auto&& add) {
+        for (std::size_t v = 0; v < mv.cams.size(); ++v) add(mv.cams[v], mv.masks[v]);
+      });
+      grouped_runs.add_views([&](auto&& add) {
+        for (std::size_t v = 0; v < mv.cams.size(); ++v) add(mv.cams[v], runs[v]);
+      });
+      vcar::BoundaryRefinement plain(g, cand, p);
+      for (std::size_t v = 0; v < mv.cams.size(); ++v) plain.add_view(mv.cams[v], mv.masks[v]);
+      std::size_t overflowing = 0, skipped = 0;
+      for (std::size_t k = 0; k < cand.size(); ++k) {
+        overflowing += plain.n_ovf(k) > 0 && plain.n_ovf(k) < plain.n_vis(k);
+        skipped += one_by_one.n_vis(k) < plain.n_vis(k);
+      }
+      // The premises: candidates overflow in some views, not all; skipping leaves views out.
+      CHECK(overflowing > 100);
+      if (mode >= 1) CHECK(skipped > 100);
+      require_same_state(one_by_one, grouped);
+      require_same_state(one_by_one, grouped_runs);
+      if (mode >= 1) CHECK(grouped.boxes_observed() == one_by_one.boxes_observed());
+      if (mode == 2) CHECK(grouped.flagged_untraced() == one_by_one.flagged_untraced());
+    }
+  }
+  vcar::set_num_threads(saved);
+}
+
+TEST_CASE("add_views: views whose tiles do not pay are observed in turn; a bad view keeps the ones before") {
+  // 40 candidates: a 64 x 48 view (3072 px) is observed from tiles, a 160 x 120 one (19200 px)
+  // from its pixels (tiles_pay: 256 pixels per candidate). Alternating sizes makes add_views
+  // observe the queued tiled views before each decoded one.
+  const ManyViews small = many_views(20, 64, 48), large = many_views(20, 160, 120);
+  std::vector<vcar::Camera> cams;
+  std::vector<vcar::RleMask> masks;
+  for (int v = 0; v < 20; ++v) {
+    const ManyViews& from = v % 3 == 2 ? large : small;
+    cams.push_back(from.cams[v]);
+    masks.push_back(vcar::RleMask::encode(from.masks[v]));
+  }
+  const vcar::GaussianScene g = random_gaussians(6000, 13, -4.f, -2.f);
+  std::vector<vcar::Index> cand(40);
+  for (std::size_t i = 0; i < cand.size(); ++i) cand[i] = static_cast<vcar::Index>(i * 37 % g.size());
+  vcar::AbrParams p;
+  p.rho = 0.3f;
+  vcar::BoundaryRefinement one_by_one(g, cand, p), grouped(g, cand, p);
+  for (std::size_t v = 0; v < cams.size(); ++v) one_by_one.add_view(cams[v], masks[v]);
+  grouped.add_views([&](auto&& add) {
+    for (std::size_t v = 0; v < cams.size(); ++v) add(cams[v], masks[v]);
+  });
+  std::size_t seen = 0;
+  for (std::size_t k = 0; k < cand.size(); ++k) seen += one_by_one.n_vis(k);
+  CHECK(seen > 100);
+  require_same_state(one_by_one, grouped);
+
+  // View 7's runs do not cover its image: add_views throws naming it, and views 0-6 are added.
+  std::vector<vcar::RleMask> bad = masks;
+  bad[7].runs.back() -= 1;
+  vcar::BoundaryRefinement first_seven(g, cand, p), broken(g, cand, p);
+  for (std::size_t v = 0; v < 7; ++v) first_seven.add_view(cams[v], masks[v]);
+  CHECK_THROWS_WITH(broken.add_views([&](auto&& add) {
+    for (std::size_t v = 0; v < cams.size(); ++v) add(cams[v], bad[v]);
+  }), Catch::Contains("v7"));
+  CHECK(broken.views() == 7);
+  require_same_state(first_seven, broken);
+}

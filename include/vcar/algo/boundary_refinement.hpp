@@ -394,42 +394,117 @@ class BoundaryRefinement {
   void add_view(const Camera& cam, const RleMask& mask) { add_view(cam, mask, static_cast<std::uint16_t>(views_)); }
   void add_view(const Camera& cam, const RleMask& mask, std::uint16_t view) { observe_added(cam, mask, view); }
 
+ // Beyond the paper (the same result as add_view called for each view in turn): the views that
+  // for_each_view(add) hands out, add(camera, mask) with a Mask or an RleMask, numbered on from
+  // views(). They are observed kViewGroup at a time with the candidates outside and the views
+  // inside, so that a run of candidates' state stays in cache across the views (add_view walks
+  // every candidate once per view). Throws as add_view does; the views before a bad one stay
+  // added.
+  template <class ForEachView>
+  void add_views(ForEachView&& for_each_view) {
+    try {
+      for_each_view([&](const Camera& cam, const auto& mask) {
+        enqueue(cam, mask, static_cast<std::uint16_t>(views_));
+        if (pending_count_ == kViewGroup) observe_pending();
+      });
+    } catch (...) {
+      observe_pending();
+      throw;
+    }
+    observe_pending();
+  }
+  static constexpr std::size_t kViewGroup = 16;  // views observed together by add_views
+
  private:
+  // What observe_boxes reads of one view: the camera, its projection of means and chunk boxes,
+  // and what abr_geometry reads of it.
+  struct ViewContext {
+    const Camera* cam;
+    detail::ViewLanes lanes;
+    AbrCamera C;
+    static ViewContext of(const Camera& cam, const AbrParams& p) {
+      return {&cam, detail::ViewLanes::of(detail::MeanProjection::from(cam)), AbrCamera::from(cam, p.projection)};
+    }
+  };
+
+  struct PendingView {                       // a view added, not yet observed (enqueue)
+    Camera cam;
+    std::uint16_t id = 0;
+    bool tiles = false;                      // observed from `packed`, else from `pixels`
+    MaskTiles packed;
+    const Mask* pixels = nullptr;
+    std::vector<std::uint32_t> gate;         // expect_views: least n_ovf that can open the gate, by n_vis
+  };
+
   template <class AnyMask>
   void observe_added(const Camera& cam, const AnyMask& mask, std::uint16_t view) {
+    enqueue(cam, mask, view);
+    observe_pending();
+  }
+  // A view to observe: counted now (views_), observed by observe_pending with the others queued.
+  // Its mask is packed into tiles (or, when the tiles do not pay, read from its pixels, which stay
+  // valid only until the next view: then it is observed at once).
+  template <class AnyMask>
+  void enqueue(const Camera& cam, const AnyMask& mask, std::uint16_t view) {
     check_view(cam, mask, view);
     if (expected_ && views_ >= expected_)
       throw Error("more views than expect_views announced (" + std::to_string(expected_) + ")", "view '" + cam.name + "'");
     enter_view(cam);
-    const bool tiles = tiles_pay(size(), static_cast<std::size_t>(mask.width) * static_cast<std::size_t>(mask.height));
-    const Mask* pixels = nullptr;  // the mask's bytes, when no tiles
-    if (tiles) tiles_.build(mask);
-    else pixels = &decoded(mask);
+    if (pending_count_ == pending_.size()) pending_.emplace_back();
+    PendingView& v = pending_[pending_count_++];
+    v.cam = cam;
+    v.id = view;
+    v.tiles = tiles_pay(size(), static_cast<std::size_t>(mask.width) * static_cast<std::size_t>(mask.height));
+    v.pixels = nullptr;
+    if (v.tiles) v.packed.build(mask);
+    else v.pixels = &decoded(mask);
     // With expect_views: this view and those after it; a candidate whose gate cannot open even
     // if it overflows in all of them is not observed any more.
-    const std::size_t remaining = expected_ ? expected_ - views_ + 1 : 0;
-    if (expected_) fill_gate_table(remaining);
-    auto want = [&](std::size_t k) { return !expected_ || n_ovf_[k] >= gate_min_ovf_[n_vis_[k]]; };
+    if (expected_) fill_gate_table(expected_ - views_ + 1, v.gate);
+    if (!v.tiles) observe_pending();
+  }
+  // Observes the queued views, in order for each candidate (the chunk boxes outside, the views
+  // inside).
+  void observe_pending() {
+    if (pending_count_ == 0) return;
+    std::vector<ViewContext> context;
+    for (std::size_t q = 0; q < pending_count_; ++q) context.push_back(ViewContext::of(pending_[q].cam, params_));
     // With expect_views a slot not wanted stays so (unobserved, its counts stay, and the least
     // n_ovf that opens its gate only grows as views pass): a chunk box without a wanted slot
     // is marked idle and left out of the views after this one (on bench_reselect's scene 39%
     // of the chunk-views, each a scan of 64 slots).
     const std::vector<std::uint32_t>* boxes = expected_ ? &live_boxes_ : nullptr;
     std::uint8_t* idle = expected_ ? idle_.data() : nullptr;
+    const std::int64_t n_boxes = static_cast<std::int64_t>(boxes ? boxes->size() : box_.size());
+    parallel_chunks(n_boxes, kChunk / kBox, [&](std::int64_t, std::int64_t b, std::int64_t e) {
+      for (std::size_t q = 0; q < pending_count_; ++q) observe_added_boxes(pending_[q], context[q], b, e, boxes, idle);
+    });
+    pending_count_ = 0;
+    if (expected_) std::erase_if(live_boxes_, [&](std::uint32_t c) { return idle_[c] != 0; });
+  }
+  // One queued view on the chunk boxes [b, e): every wanted slot's observation enters its counts
+  // and minima (add_view's rules: expect_views' gate, defer_tracing).
+  void observe_added_boxes(const PendingView& v, const ViewContext& vc, std::int64_t b, std::int64_t e,
+                           const std::vector<std::uint32_t>* boxes, std::uint8_t* idle) {
+    const std::uint32_t* gate = v.gate.data();
+    const std::uint16_t view = v.id;
+    const MaskTiles* tiles = v.tiles ? &v.packed : nullptr;
+    auto want = [&](std::size_t k) { return !expected_ || n_ovf_[k] >= gate[n_vis_[k]]; };
     if (!defer_) {
-      observe_view(cam, pixels, tiles, want, [&](std::size_t k, const AbrObservation& obs) { add(k, obs, view); }, boxes,
-                   Always{}, idle);
+      auto apply = [&](std::size_t k, const AbrObservation& obs) { add(k, obs, view); };
+      Always trace;
+      observe_boxes(vc, b, e, boxes, tiles, v.pixels, want, apply, trace, idle);
     } else {
       // defer_tracing: an overflowing endpoint is traced only while the slot's overflow ratio,
       // this view counted as overflowing, is above rho; the slots left untraced are marked.
       const float rho = params_.rho;
       auto trace = [&](std::size_t k) { return static_cast<float>(n_ovf_[k] + 1) > rho * static_cast<float>(n_vis_[k] + 1); };
-      observe_view(cam, pixels, tiles, want, [&](std::size_t k, const AbrObservation& obs) {
-        if (obs.overflow && !trace(k)) untraced_[k] = 1;  // before add(): the counts observe_view read
+      auto apply = [&](std::size_t k, const AbrObservation& obs) {
+        if (obs.overflow && !trace(k)) untraced_[k] = 1;  // before add(): the counts observe_boxes read
         add(k, obs, view);
-      }, boxes, trace, idle);
+      };
+      observe_boxes(vc, b, e, boxes, tiles, v.pixels, want, apply, trace, idle);
     }
-    if (expected_) std::erase_if(live_boxes_, [&](std::uint32_t c) { return idle_[c] != 0; });
   }
   const Mask& decoded(const Mask& mask) { return mask; }
   const Mask& decoded(const RleMask& mask) { return decoder_.decode(mask); }
@@ -701,13 +776,12 @@ class BoundaryRefinement {
     ++views_;
   }
 
-  // gate_can_open as a table for this view (expect_views): gate_min_ovf_[v] is
-  // least_opening_overflow(v), so that the per-slot test is one integer comparison. n_vis <
-  // views_ here.
-  void fill_gate_table(std::size_t remaining) {
-    gate_min_ovf_.resize(views_ + 1);
+  // gate_can_open as a table for a view (expect_views): gate[v] is least_opening_overflow(v), so
+  // that the per-slot test is one integer comparison. n_vis < views_ here.
+  void fill_gate_table(std::size_t remaining, std::vector<std::uint32_t>& gate) const {
+    gate.resize(views_ + 1);
     for (std::size_t v = 0; v <= views_; ++v)
-      gate_min_ovf_[v] = static_cast<std::uint32_t>(least_opening_overflow(v, remaining, params_.rho));
+      gate[v] = static_cast<std::uint32_t>(least_opening_overflow(v, remaining, params_.rho));
   }
 
   // Slot k's observation in view `view` enters its counts and minima (B.3).
@@ -744,104 +818,115 @@ class BoundaryRefinement {
   void observe_view(const Camera& cam, const Mask* mask, bool tiles, Want want, Apply apply,
                     const std::vector<std::uint32_t>* boxes = nullptr, Trace trace = {},
                     std::uint8_t* idle = nullptr) {
-    const AbrParams p = params_;
-    if (!(1.f >= p.projection.alpha_min)) return;  // rule (e): no Gaussian is eligible
-    AbrObservation inside;  // eligible, no endpoint outside, no factor
-    inside.eligible = true;
-    const detail::ViewLanes view = detail::ViewLanes::of(detail::MeanProjection::from(cam));
-    const AbrCamera C = AbrCamera::from(cam, p.projection);
+    const ViewContext vc = ViewContext::of(cam, params_);
     const std::int64_t n_boxes = static_cast<std::int64_t>(boxes ? boxes->size() : box_.size());
     parallel_chunks(n_boxes, kChunk / kBox, [&](std::int64_t, std::int64_t b, std::int64_t e) {
-      constexpr std::size_t L = simd::width;
-      std::array<float, 7> group[L];  // the boxes of the next L chunks, projected together
-      detail::BoxViewLanes projected;
-      for (std::int64_t i = b; i < e; ++i) {
-        auto chunk_at = [&](std::int64_t at) {
-          return boxes ? (*boxes)[static_cast<std::size_t>(at)] : static_cast<std::size_t>(at);
-        };
-        const std::size_t c = chunk_at(i);
-        if (tiles && (i - b) % static_cast<std::int64_t>(L) == 0) {
-          const std::size_t count = static_cast<std::size_t>(std::min<std::int64_t>(static_cast<std::int64_t>(L), e - i));
-          for (std::size_t l = 0; l < count; ++l) group[l] = box_[chunk_at(i + static_cast<std::int64_t>(l))];
-          detail::project_boxes(view, detail::BoxLanes::of(group, count), projected);
-        }
-        const std::size_t j0 = c * kBox, j1 = std::min(size(), j0 + kBox);
-        bool any = false;
-        for (std::size_t k = j0; k < j1 && !any; ++k) any = want(k);
-        if (!any) {
-          if (idle) idle[c] = 1;  // this task's box only
-          continue;
-        }
-        switch (tiles ? chunk_content(projected[static_cast<std::size_t>(i - b) % L], C, cam, box_[c], p)
-                      : MaskTiles::mixed) {
-          case MaskTiles::background: continue;  // no centre on foreground: none eligible (B.1)
-          case MaskTiles::foreground:            // every centre and endpoint on foreground
-            for (std::size_t k = j0; k < j1; ++k)
-              if (want(k)) apply(k, inside);
-            continue;
-          case MaskTiles::mixed: break;
-        }
-        // observe_gaussian, simd::width slots at a time (kBox is a whole number of batches).
-        AbrBatch g;
-        AbrLanes a{};  // lanes not traced keep finite values from earlier batches (masked out)
-        alignas(64) std::int32_t centre[simd::width];
-        for (std::size_t j = j0; j < j1; j += simd::width) {
-          const std::size_t lanes = std::min(simd::width, j1 - j);
-          bool wanted = false;
-          for (std::size_t l = 0; l < lanes && !wanted; ++l) wanted = want(j + l);
-          if (!wanted) continue;
-          geometry(C, j, g);
-          // B.1 and rule (e) per lane: with the tiles every lane's centre and endpoint lookups at
-          // once from the packed bits, else lane by lane on the mask (the same answers).
-          if (tiles) {
-            lane_tests(g, centre, a.outside);
-          } else {
-            for (std::size_t l = 0; l < lanes; ++l) {
-              centre[l] = g.front[l] > 0.f && g.det[l] > 0.f && mask_at(*mask, g.mx[l], g.my[l]);
-              a.outside[l] = centre[l] ? outside_endpoints(*mask, g, l) : 0;
-            }
-          }
-          // A lane whose centre is eligible and whose endpoints all lie on foreground is
-          // "eligible, no overflow" without tracing; the others are traced together.
-          unsigned overflowing = 0, traced = 0;
-          for (std::size_t l = 0; l < lanes; ++l) {
-            const std::size_t k = j + l;
-            if (!centre[l] || !want(k)) continue;  // B.1, rule (e)
-            if (!a.outside[l]) {
-              apply(k, inside);
-              continue;
-            }
-            overflowing |= 1u << l;
-            if (!trace(k)) continue;
-            traced |= 1u << l;
-            for (int d = 0; d < 3; ++d) a.s[d][l] = s_[d][k], a.beat[d][l] = f_[d][k];
-          }
-          if (traced) {
-            if (tiles) trace_overflow(tiles_, g, traced, p, a);
-            else trace_overflow(*mask, g, traced, p, a);
-          }
-          for (unsigned m = overflowing; m; m &= m - 1) {
-            const auto l = static_cast<std::size_t>(std::countr_zero(m));
-            AbrObservation obs;
-            obs.eligible = obs.overflow = true;
-            if ((traced >> l) & 1u)
-              for (int d = 0; d < 3; ++d) obs.f[d] = a.f[d][l];
-            apply(j + l, obs);
-          }
-        }
-      }
+      observe_boxes(vc, b, e, boxes, tiles ? &tiles_ : nullptr, mask, want, apply, trace, idle);
     });
   }
 
-  // Per lane of g, from tiles_ (the current mask's bits): centre[l] = 1 when the centre lies
+  // observe_view's work on the chunk boxes [b, e) (positions into `boxes`, or box ids), with
+  // the view's tiles (or null: its pixels `mask`). A box already marked in `idle` is skipped.
+  template <class Want, class Apply, class Trace>
+  void observe_boxes(const ViewContext& vc, std::int64_t b, std::int64_t e, const std::vector<std::uint32_t>* boxes,
+                     const MaskTiles* tiles, const Mask* mask, Want& want, Apply& apply, Trace& trace,
+                     std::uint8_t* idle) const {
+    const AbrParams& p = params_;
+    if (!(1.f >= p.projection.alpha_min)) return;  // rule (e): no Gaussian is eligible
+    AbrObservation inside;  // eligible, no endpoint outside, no factor
+    inside.eligible = true;
+    const AbrCamera& C = vc.C;
+    constexpr std::size_t L = simd::width;
+    std::array<float, 7> group[L];  // the boxes of the next L chunks, projected together
+    detail::BoxViewLanes projected;
+    auto chunk_at = [&](std::int64_t at) {
+      return boxes ? (*boxes)[static_cast<std::size_t>(at)] : static_cast<std::size_t>(at);
+    };
+    for (std::int64_t i = b; i < e; ++i) {
+      const std::size_t c = chunk_at(i);
+      if (tiles && (i - b) % static_cast<std::int64_t>(L) == 0) {
+        const std::size_t count = static_cast<std::size_t>(std::min<std::int64_t>(static_cast<std::int64_t>(L), e - i));
+        for (std::size_t l = 0; l < count; ++l) group[l] = box_[chunk_at(i + static_cast<std::int64_t>(l))];
+        detail::project_boxes(vc.lanes, detail::BoxLanes::of(group, count), projected);
+      }
+      if (idle && idle[c]) continue;  // no wanted slot since an earlier view
+      const std::size_t j0 = c * kBox, j1 = std::min(size(), j0 + kBox);
+      bool any = false;
+      for (std::size_t k = j0; k < j1 && !any; ++k) any = want(k);
+      if (!any) {
+        if (idle) idle[c] = 1;  // this task's box only
+        continue;
+      }
+      switch (tiles ? chunk_content(*tiles, projected[static_cast<std::size_t>(i - b) % L], C, *vc.cam, box_[c], p)
+                    : MaskTiles::mixed) {
+        case MaskTiles::background: continue;  // no centre on foreground: none eligible (B.1)
+        case MaskTiles::foreground:            // every centre and endpoint on foreground
+          for (std::size_t k = j0; k < j1; ++k)
+            if (want(k)) apply(k, inside);
+          continue;
+        case MaskTiles::mixed: break;
+      }
+      // observe_gaussian, simd::width slots at a time (kBox is a whole number of batches).
+      AbrBatch g;
+      AbrLanes a{};  // lanes not traced keep finite values from earlier batches (masked out)
+      alignas(64) std::int32_t centre[simd::width];
+      for (std::size_t j = j0; j < j1; j += simd::width) {
+        const std::size_t lanes = std::min(simd::width, j1 - j);
+        // Bit l: slot j + l is wanted; every lane tested without a branch (most are wanted).
+        unsigned wanted = 0;
+        for (std::size_t l = 0; l < lanes; ++l) wanted |= static_cast<unsigned>(want(j + l)) << l;
+        if (!wanted) continue;
+        geometry(C, j, g);
+        // B.1 and rule (e) per lane: with the tiles every lane's centre and endpoint lookups at
+        // once from the packed bits, else lane by lane on the mask (the same answers).
+        if (tiles) {
+          lane_tests(*tiles, g, centre, a.outside);
+        } else {
+          for (std::size_t l = 0; l < lanes; ++l) {
+            centre[l] = g.front[l] > 0.f && g.det[l] > 0.f && mask_at(*mask, g.mx[l], g.my[l]);
+            a.outside[l] = centre[l] ? outside_endpoints(*mask, g, l) : 0;
+          }
+        }
+        // Bit l: eligible (B.1, rule (e)), and of those, some endpoint outside. A lane eligible
+        // with every endpoint on foreground is "eligible, no overflow" without tracing; the
+        // overflowing ones are traced together.
+        using BI = simd::batch<std::int32_t>;
+        const unsigned eligible = wanted & simd::nonzero_lanes(BI::load_aligned(centre));
+        const unsigned overflowing = eligible & simd::nonzero_lanes(BI::load_aligned(a.outside));
+        for (unsigned m = eligible & ~overflowing; m; m &= m - 1) apply(j + static_cast<std::size_t>(std::countr_zero(m)), inside);
+        unsigned traced = 0;
+        for (unsigned m = overflowing; m; m &= m - 1) {
+          const auto l = static_cast<std::size_t>(std::countr_zero(m));
+          const std::size_t k = j + l;
+          if (!trace(k)) continue;
+          traced |= 1u << l;
+          for (int d = 0; d < 3; ++d) a.s[d][l] = s_[d][k], a.beat[d][l] = f_[d][k];
+        }
+        if (traced) {
+          if (tiles) trace_overflow(*tiles, g, traced, p, a);
+          else trace_overflow(*mask, g, traced, p, a);
+        }
+        for (unsigned m = overflowing; m; m &= m - 1) {
+          const auto l = static_cast<std::size_t>(std::countr_zero(m));
+          AbrObservation obs;
+          obs.eligible = obs.overflow = true;
+          if ((traced >> l) & 1u)
+            for (int d = 0; d < 3; ++d) obs.f[d] = a.f[d][l];
+          apply(j + l, obs);
+        }
+      }
+    }
+  }
+
+  // Per lane of g, from `tiles` (the view's mask in bits): centre[l] = 1 when the centre lies
   // between the planes, inside the image, on foreground, and Sigma2D is not degenerate (B.1,
   // rule (e)); bit k of outside[l] set when 3-sigma endpoint k (Eq. 9) lies outside the image or
   // on background (B.1). The same answers as mask_at and outside_endpoints on the mask.
-  void lane_tests(const AbrBatch& g, std::int32_t* centre, std::int32_t* outside) const {
+  static void lane_tests(const MaskTiles& tiles, const AbrBatch& g, std::int32_t* centre, std::int32_t* outside) {
     using BF = simd::batch<float>;
     using BI = simd::batch<std::int32_t>;
     const BF zero(0.f);
-    auto foreground = [&](const float* u, const float* v) { return mask_at(tiles_, BF::load_aligned(u), BF::load_aligned(v)); };
+    auto foreground = [&](const float* u, const float* v) { return mask_at(tiles, BF::load_aligned(u), BF::load_aligned(v)); };
     const BI ok = simd::to_int(simd::select((BF::load_aligned(g.front) > zero) & (BF::load_aligned(g.det) > zero),
                                             BF(1.f), zero));
     (foreground(g.mx, g.my) & ok).store_aligned(centre);
@@ -876,10 +961,10 @@ class BoundaryRefinement {
   // Eq. 9's endpoints lie within sigma_c sqrt(lambda_1) of the centre, and by Eq. 10 lambda_1 <=
   // ||J||^2 max_d s_d^2 + eps2d); mixed otherwise (observed Gaussian by Gaussian).
   // `v`: the chunk's box in this view (detail::project_boxes).
-  MaskTiles::Content chunk_content(const detail::BoxView& v, const AbrCamera& C, const Camera& cam,
-                                   const std::array<float, 7>& b, const AbrParams& p) const {
+  static MaskTiles::Content chunk_content(const MaskTiles& tiles, const detail::BoxView& v, const AbrCamera& C,
+                                          const Camera& cam, const std::array<float, 7>& b, const AbrParams& p) {
     if (v.visibility == detail::BoxView::none_visible) return MaskTiles::background;
-    const MaskTiles::Content centres = tiles_.classify(v.x0, v.y0, v.x1, v.y1);
+    const MaskTiles::Content centres = tiles.classify(v.x0, v.y0, v.x1, v.y1);
     if (centres == MaskTiles::background) return MaskTiles::background;
     if (v.visibility != detail::BoxView::all_visible || !(p.projection.eps2d > 0.f)) return MaskTiles::mixed;
     // Nearest camera depth over the box (affine in the point: at a corner), with margin.
@@ -892,7 +977,7 @@ class BoundaryRefinement {
     if (!(reach < 1e6f)) return MaskTiles::mixed;
     const int r = static_cast<int>(std::ceil(reach));
     if (v.x0 - r < 0 || v.y0 - r < 0 || v.x1 + r >= cam.width || v.y1 + r >= cam.height) return MaskTiles::mixed;
-    return tiles_.classify(v.x0 - r, v.y0 - r, v.x1 + r, v.y1 + r) == MaskTiles::foreground ? MaskTiles::foreground
+    return tiles.classify(v.x0 - r, v.y0 - r, v.x1 + r, v.y1 + r) == MaskTiles::foreground ? MaskTiles::foreground
                                                                                             : MaskTiles::mixed;
   }
 
@@ -907,7 +992,9 @@ class BoundaryRefinement {
   std::array<std::span<float>, 9> rot_;      // candidate rotation matrices, column-major
   std::array<std::span<float>, 3> s_;        // candidate scales exp(log s)
   std::vector<std::array<float, 7>> box_;    // per kBox slots: centre box lo, hi, max max_d s_d^2
-  MaskTiles tiles_;                          // the current view's mask in tiles
+  MaskTiles tiles_;                          // the current view's mask in tiles (change_view, complete_view)
+  std::vector<PendingView> pending_;         // capacity kept: up to kViewGroup views
+  std::size_t pending_count_ = 0;
   MaskDecoder decoder_;                      // a run-length encoded view's pixels, when no tiles
   std::array<std::span<float>, 3> log_s_;    // candidate log-scales before refinement (by slot)
   std::array<std::span<float>, 3> f_;        // running minimum candidate factor per axis
@@ -919,7 +1006,6 @@ class BoundaryRefinement {
   std::vector<std::uint32_t> wanted_boxes_;  // chunk boxes with fresh or stale slots (completion)
   std::size_t views_ = 0;
   std::size_t expected_ = 0;                 // expect_views (0: every candidate observed in every view)
-  std::vector<std::uint32_t> gate_min_ovf_;  // expect_views: least n_ovf that can open the gate, by n_vis
   std::vector<std::uint32_t> live_boxes_;    // expect_views: chunk boxes that may hold a wanted slot
   std::vector<std::uint8_t> idle_;           // expect_views: per chunk box, none of its slots wanted
   bool defer_ = false;                       // defer_tracing
@@ -940,7 +1026,7 @@ AbrResult refine_deferred(const GaussianScene& scene, const std::vector<Index>& 
   BoundaryRefinement abr(scene, candidates, params);
   abr.expect_views(views);  // candidates whose gate can no longer open are skipped (same result)
   abr.defer_tracing();
-  for_each_view([&](const Camera& cam, const auto& mask) { abr.add_view(cam, mask); });  // a Mask or an RleMask
+  abr.add_views(for_each_view);  // each view a Mask or an RleMask
   AbrResult a = abr.finish();
   const std::vector<std::size_t> again = abr.flagged_untraced();
   if (again.empty()) return a;
@@ -950,7 +1036,7 @@ AbrResult refine_deferred(const GaussianScene& scene, const std::vector<Index>& 
   exact.expect_views(views);
   for (std::size_t i = 0; i < again.size(); ++i)  // the first pass's minima bound the exact ones
     exact.bound_minimum(i, {abr.min_factor(again[i], 0), abr.min_factor(again[i], 1), abr.min_factor(again[i], 2)});
-  for_each_view([&](const Camera& cam, const auto& mask) { exact.add_view(cam, mask); });
+  exact.add_views(for_each_view);
   const AbrResult b = exact.finish();
   for (std::size_t i = 0; i < again.size(); ++i) {
     for (int d = 0; d < 3; ++d) a.log_scale[d][again[i]] = b.log_scale[d][i];
