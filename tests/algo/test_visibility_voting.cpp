@@ -210,6 +210,37 @@ TEST_CASE("selected with ratios: ascending scene indices, each with its Eq. 3 ra
   }
 }
 
+TEST_CASE("selected over several blocks of sorted positions: the brute-force picks for any thread count") {
+  // 140001 candidates: three blocks of 2^16 sorted positions, the last one partial.
+  const auto scene = random_scene(140001, 19);
+  const auto cams = ring_cameras(4);
+  std::mt19937 rng(23);
+  std::vector<Mask> masks;
+  for (const auto& c : cams) masks.push_back(random_mask(c.width, c.height, rng));
+  const int saved = vcar::max_threads();
+  for (int threads : {1, std::max(2, saved)}) {
+    vcar::set_num_threads(threads);
+    vcar::VisibilityVoting v(scene);
+    for (std::size_t j = 0; j < cams.size(); ++j) v.add_view(cams[j], &masks[j]);
+    for (float tau : {0.f, 0.5f, 0.9f}) {
+      INFO(threads << " threads, tau " << tau);
+      std::vector<Index> idx, want;
+      std::vector<float> ratios;
+      v.selected(tau, idx, ratios);
+      for (std::size_t i = 0; i < scene.size(); ++i)
+        if (v.ratio_of(static_cast<Index>(i)) >= tau) want.push_back(static_cast<Index>(i));
+      if (tau == 0.f) CHECK(want.size() == scene.size());  // R >= 0 always
+      else CHECK((want.size() > 1000 && want.size() + 1000 < scene.size()));  // picks in every block, not all
+      CHECK(idx == want);
+      REQUIRE(ratios.size() == idx.size());
+      int wrong = 0;
+      for (std::size_t k = 0; k < idx.size(); ++k) wrong += ratios[k] != v.ratio_of(idx[k]);
+      CHECK(wrong == 0);
+    }
+  }
+  vcar::set_num_threads(saved);
+}
+
 TEST_CASE("MultiObjectVoting equals K single votes") {
   const auto scene = random_scene(2000, 13);
   const auto cams = ring_cameras(9);

@@ -320,17 +320,36 @@ public:
   // then a radix sort of (scene index, R) by index.
   void selected(int o, float tau, std::vector<Index>& indices, std::vector<float>& ratios) const {
     flush();
-    std::vector<std::uint64_t> picked;  // scene index << 32 | bits of R
-    Index largest = 0;
-    for (std::size_t j = 0; j < n_; ++j) {
-      const float r = ratio_at(o, j);
-      if (!(r >= tau)) continue;
-      const Index i = candidate(means_.order[j]);
-      largest = std::max(largest, i);
-      picked.push_back(static_cast<std::uint64_t>(i) << 32 | std::bit_cast<std::uint32_t>(r));
-    }
+    // In fixed blocks of sorted positions, in parallel: each block counts its picks, then writes
+    // them at its offset (the same order for any thread count).
+    constexpr std::size_t block = std::size_t{1} << 16;
+    const std::size_t blocks = (n_ + block - 1) / block;
+    std::vector<std::size_t> offset(blocks + 1, 0);
+    std::vector<Index> largest(blocks, 0);
+    auto picks = [&](std::size_t b, auto&& pick) {
+      for (std::size_t j = b * block; j < std::min(n_, (b + 1) * block); ++j) {
+        const float r = ratio_at(o, j);
+        if (r >= tau) pick(j, r);
+      }
+    };
+    parallel_for(static_cast<std::int64_t>(blocks), [&](std::int64_t bb) {
+      const auto b = static_cast<std::size_t>(bb);
+      picks(b, [&](std::size_t j, float) {
+        ++offset[b + 1];
+        largest[b] = std::max(largest[b], candidate(means_.order[j]));
+      });
+    });
+    for (std::size_t b = 0; b < blocks; ++b) offset[b + 1] += offset[b];
+    std::vector<std::uint64_t> picked(offset[blocks]);  // scene index << 32 | bits of R
+    parallel_for(static_cast<std::int64_t>(blocks), [&](std::int64_t bb) {
+      const auto b = static_cast<std::size_t>(bb);
+      std::size_t at = offset[b];
+      picks(b, [&](std::size_t j, float r) {
+        picked[at++] = static_cast<std::uint64_t>(candidate(means_.order[j])) << 32 | std::bit_cast<std::uint32_t>(r);
+      });
+    });
     std::vector<std::uint64_t> tmp;
-    sort_by_upper_word(picked, tmp, largest);
+    sort_by_upper_word(picked, tmp, largest.empty() ? 0 : *std::max_element(largest.begin(), largest.end()));
     indices.resize(picked.size());
     ratios.resize(picked.size());
     for (std::size_t k = 0; k < picked.size(); ++k) {
