@@ -27,18 +27,14 @@ namespace vcar {
 class MaskTiles {
 public:
   static constexpr int tile = 8;
-  static constexpr std::size_t parallel_pixels = std::size_t{1} << 18;  // masks this large pack in parallel
+  static constexpr std::size_t parallel_pixels = RleMask::parallel_pixels;  // masks this large pack in parallel
   enum Content : std::uint8_t { background = 0, mixed = 1, foreground = 2 };
 
   // Rebuilds for `m` (capacity is kept: no allocation when the size does not grow). One pass over
   // the mask's bytes packs the tiles (rows of tiles in parallel for large masks); the summary is
   // read from the tile words.
   void build(const Mask& m) {
-    width_ = m.width;
-    height_ = m.height;
-    tw_ = (m.width + tile - 1) / tile;
-    th_ = (m.height + tile - 1) / tile;
-    words_.resize(static_cast<std::size_t>(tw_) * th_);  // each tile row zeroed by its packer
+    resize(m.width, m.height);
     const std::uint8_t* src = m.data.data();
     const int whole = width_ / tile, rest = width_ - whole * tile;
     const auto pack_tile_row = [&](std::int64_t ty) {  // writes tile row ty's words only
@@ -64,29 +60,14 @@ public:
         }
       }
     };
-    const std::size_t stride = static_cast<std::size_t>(tw_) + 1;
-    any_.resize(stride * (static_cast<std::size_t>(th_) + 1));
-    all_.resize(any_.size());
-    const auto pack_and_count = [&](std::int64_t ty) {
-      pack_tile_row(ty);
-      count_tile_row(static_cast<int>(ty));
-    };
-    if (m.pixels() >= parallel_pixels)
-      parallel_for(th_, pack_and_count);
-    else
-      for (int ty = 0; ty < th_; ++ty) pack_and_count(ty);
-    integrate_rows();
+    pack_rows(pack_tile_row);
   }
 
   // Rebuilds for the run-length encoded mask `r`, without decoding it: each tile row ORs in the
   // bits of the foreground runs that cross its pixel rows (tile rows in parallel for large
   // masks), in time that grows with the foreground's tiles rather than with the pixels.
   void build(const RleMask& r) {
-    width_ = r.width;
-    height_ = r.height;
-    tw_ = (r.width + tile - 1) / tile;
-    th_ = (r.height + tile - 1) / tile;
-    words_.resize(static_cast<std::size_t>(tw_) * th_);
+    resize(r.width, r.height);
     const std::size_t W = static_cast<std::size_t>(width_);
     // first_run_[ty]: the first run that ends past the first pixel of tile row ty, and where it starts.
     first_run_.resize(static_cast<std::size_t>(th_));
@@ -116,16 +97,8 @@ public:
           b += x1 - x0;
         }
       }
-      count_tile_row(ty);
     };
-    const std::size_t stride = static_cast<std::size_t>(tw_) + 1;
-    any_.resize(stride * (static_cast<std::size_t>(th_) + 1));
-    all_.resize(any_.size());
-    if (static_cast<std::size_t>(width_) * height_ >= parallel_pixels)
-      parallel_for(th_, pack_tile_row);
-    else
-      for (int ty = 0; ty < th_; ++ty) pack_tile_row(ty);
-    integrate_rows();
+    pack_rows(pack_tile_row);
   }
 
   int width() const noexcept { return width_; }
@@ -164,6 +137,30 @@ public:
   }
 
 private:
+  // Sizes for a w x h mask: the tile words (each tile row zeroed by its packer) and the summary.
+  void resize(int w, int h) {
+    width_ = w;
+    height_ = h;
+    tw_ = (w + tile - 1) / tile;
+    th_ = (h + tile - 1) / tile;
+    words_.resize(static_cast<std::size_t>(tw_) * th_);
+    any_.resize((static_cast<std::size_t>(tw_) + 1) * (static_cast<std::size_t>(th_) + 1));
+    all_.resize(any_.size());
+  }
+  // pack_tile_row(ty) writes tile row ty's words; each row is counted by the thread that packed
+  // it (tile rows in parallel for large masks), then the summary is integrated.
+  template <class PackRow>
+  void pack_rows(const PackRow& pack_tile_row) {
+    const auto pack_and_count = [&](std::int64_t ty) {
+      pack_tile_row(ty);
+      count_tile_row(static_cast<int>(ty));
+    };
+    if (static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_) >= parallel_pixels)
+      parallel_for(th_, pack_and_count);
+    else
+      for (int ty = 0; ty < th_; ++ty) pack_and_count(ty);
+    integrate_rows();
+  }
   // The summary, in two steps. count_tile_row(ty) writes row ty + 1 of both integral images as
   // counts along tile row ty only (the packer's thread, right after packing it; column 0 is 0);
   // integrate_rows() then adds each row to the one below it, which makes them the integral
