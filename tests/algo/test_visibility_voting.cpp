@@ -47,6 +47,13 @@ Mask random_mask(int w, int h, std::mt19937& rng) {
   return m;
 }
 
+// One random mask per camera, drawn in camera order.
+std::vector<Mask> random_masks(const std::vector<Camera>& cams, std::mt19937& rng) {
+  std::vector<Mask> masks;
+  for (const auto& c : cams) masks.push_back(random_mask(c.width, c.height, rng));
+  return masks;
+}
+
 }  // namespace
 
 namespace {
@@ -154,8 +161,7 @@ TEST_CASE("a candidate subset votes like the full scene at those indices") {
   const auto scene = random_scene(500, 11);
   const auto cams = ring_cameras(5);
   std::mt19937 rng(5);
-  std::vector<Mask> masks;
-  for (const auto& c : cams) masks.push_back(random_mask(c.width, c.height, rng));
+  const std::vector<Mask> masks = random_masks(cams, rng);
   const std::vector<Index> subset = {499, 3, 250, 17, 0, 42};
   vcar::VisibilityVoting all(scene), sub(scene, subset);
   for (std::size_t j = 0; j < cams.size(); ++j) { all.add_view(cams[j], &masks[j]); sub.add_view(cams[j], &masks[j]); }
@@ -184,8 +190,7 @@ TEST_CASE("selected with ratios: ascending scene indices, each with its Eq. 3 ra
   const auto scene = random_scene(4000, 13);
   const auto cams = ring_cameras(6);
   std::mt19937 rng(8);
-  std::vector<Mask> masks;
-  for (const auto& c : cams) masks.push_back(random_mask(c.width, c.height, rng));
+  const std::vector<Mask> masks = random_masks(cams, rng);
   std::vector<Index> subset(4000);
   for (std::size_t k = 0; k < subset.size(); ++k) subset[k] = static_cast<Index>((k * 3761) % 4000);  // a permutation
   std::vector<Index> first_half(subset.begin(), subset.begin() + 2000);
@@ -215,8 +220,7 @@ TEST_CASE("selected over several blocks of sorted positions: the brute-force pic
   const auto scene = random_scene(140001, 19);
   const auto cams = ring_cameras(4);
   std::mt19937 rng(23);
-  std::vector<Mask> masks;
-  for (const auto& c : cams) masks.push_back(random_mask(c.width, c.height, rng));
+  const std::vector<Mask> masks = random_masks(cams, rng);
   const int saved = vcar::max_threads();
   for (int threads : {1, std::max(2, saved)}) {
     vcar::set_num_threads(threads);
@@ -354,8 +358,7 @@ TEST_CASE("remove_view takes a view's votes back: the counters equal a vote with
   std::mt19937 rng(5);
   const auto scene = random_scene(5000, 9);
   const auto cams = ring_cameras(7);
-  std::vector<Mask> masks;
-  for (const auto& c : cams) masks.push_back(random_mask(c.width, c.height, rng));
+  const std::vector<Mask> masks = random_masks(cams, rng);
   vcar::VisibilityVoting vote(scene);
   for (std::size_t j = 0; j < cams.size(); ++j) vote.add_view(cams[j], &masks[j]);
   vote.remove_view(cams[2], &masks[2]);
