@@ -409,9 +409,11 @@ class BoundaryRefinement {
       });
     } catch (...) {
       observe_pending();
+      release_pending();
       throw;
     }
     observe_pending();
+    release_pending();
   }
   static constexpr std::size_t kViewGroup = 16;  // views observed together by add_views
 
@@ -462,6 +464,12 @@ class BoundaryRefinement {
     // if it overflows in all of them is not observed any more.
     if (expected_) fill_gate_table(expected_ - views_ + 1, v.gate);
     if (!v.tiles) observe_pending();
+  }
+  // The queue's memory beyond one view (add_view's), given back after add_views.
+  void release_pending() {
+    if (pending_.size() <= 1) return;
+    pending_.resize(1);
+    pending_.shrink_to_fit();
   }
   // Observes the queued views, in order for each candidate (the chunk boxes outside, the views
   // inside).
@@ -993,7 +1001,7 @@ class BoundaryRefinement {
   std::array<std::span<float>, 3> s_;        // candidate scales exp(log s)
   std::vector<std::array<float, 7>> box_;    // per kBox slots: centre box lo, hi, max max_d s_d^2
   MaskTiles tiles_;                          // the current view's mask in tiles (change_view, complete_view)
-  std::vector<PendingView> pending_;         // capacity kept: up to kViewGroup views
+  std::vector<PendingView> pending_;         // up to kViewGroup views (one kept after add_views)
   std::size_t pending_count_ = 0;
   MaskDecoder decoder_;                      // a run-length encoded view's pixels, when no tiles
   std::array<std::span<float>, 3> log_s_;    // candidate log-scales before refinement (by slot)
