@@ -394,7 +394,7 @@ class BoundaryRefinement {
   void add_view(const Camera& cam, const RleMask& mask) { add_view(cam, mask, static_cast<std::uint16_t>(views_)); }
   void add_view(const Camera& cam, const RleMask& mask, std::uint16_t view) { observe_added(cam, mask, view); }
 
- // Beyond the paper (the same result as add_view called for each view in turn): the views that
+  // Beyond the paper (the same result as add_view called for each view in turn): the views that
   // for_each_view(add) hands out, add(camera, mask) with a Mask or an RleMask, numbered on from
   // views(). They are observed kViewGroup at a time with the candidates outside and the views
   // inside, so that a run of candidates' state stays in cache across the views (add_view walks
