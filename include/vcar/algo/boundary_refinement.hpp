@@ -432,9 +432,8 @@ class BoundaryRefinement {
   struct PendingView {                       // a view added, not yet observed (enqueue)
     Camera cam;
     std::uint16_t id = 0;
-    bool tiles = false;                      // observed from `packed`, else from `pixels`
-    MaskTiles packed;
-    const Mask* pixels = nullptr;
+    MaskTiles packed;                        // the mask in tiles, when they pay
+    const Mask* pixels = nullptr;            // else its pixels (then `packed` is unused)
     std::vector<std::uint32_t> gate;         // expect_views: least n_ovf that can open the gate, by n_vis
   };
 
@@ -456,14 +455,14 @@ class BoundaryRefinement {
     PendingView& v = pending_[pending_count_++];
     v.cam = cam;
     v.id = view;
-    v.tiles = tiles_pay(size(), static_cast<std::size_t>(mask.width) * static_cast<std::size_t>(mask.height));
+    const bool tiles = tiles_pay(size(), static_cast<std::size_t>(mask.width) * static_cast<std::size_t>(mask.height));
     v.pixels = nullptr;
-    if (v.tiles) v.packed.build(mask);
+    if (tiles) v.packed.build(mask);
     else v.pixels = &decoded(mask);
     // With expect_views: this view and those after it; a candidate whose gate cannot open even
     // if it overflows in all of them is not observed any more.
     if (expected_) fill_gate_table(expected_ - views_ + 1, v.gate);
-    if (!v.tiles) observe_pending();
+    if (v.pixels) observe_pending();
   }
   // The queue's memory beyond one view (add_view's), given back after add_views.
   void release_pending() {
@@ -496,7 +495,7 @@ class BoundaryRefinement {
                            const std::vector<std::uint32_t>* boxes, std::uint8_t* idle) {
     const std::uint32_t* gate = v.gate.data();
     const std::uint16_t view = v.id;
-    const MaskTiles* tiles = v.tiles ? &v.packed : nullptr;
+    const MaskTiles* tiles = v.pixels ? nullptr : &v.packed;
     auto want = [&](std::size_t k) { return !expected_ || n_ovf_[k] >= gate[n_vis_[k]]; };
     if (!defer_) {
       auto apply = [&](std::size_t k, const AbrObservation& obs) { add(k, obs, view); };

@@ -321,7 +321,7 @@ public:
   void selected(int o, float tau, std::vector<Index>& indices, std::vector<float>& ratios) const {
     flush();
     // In fixed blocks of sorted positions, in parallel: each block counts its picks, then writes
-    // them at its offset (the same order for any thread count).
+    // them at its offset with its largest scene index (the same order for any thread count).
     constexpr std::size_t block = std::size_t{1} << 16;
     const std::size_t blocks = (n_ + block - 1) / block;
     std::vector<std::size_t> offset(blocks + 1, 0);
@@ -334,10 +334,7 @@ public:
     };
     parallel_for(static_cast<std::int64_t>(blocks), [&](std::int64_t bb) {
       const auto b = static_cast<std::size_t>(bb);
-      picks(b, [&](std::size_t j, float) {
-        ++offset[b + 1];
-        largest[b] = std::max(largest[b], candidate(means_.order[j]));
-      });
+      picks(b, [&](std::size_t, float) { ++offset[b + 1]; });
     });
     for (std::size_t b = 0; b < blocks; ++b) offset[b + 1] += offset[b];
     std::vector<std::uint64_t> picked(offset[blocks]);  // scene index << 32 | bits of R
@@ -345,7 +342,9 @@ public:
       const auto b = static_cast<std::size_t>(bb);
       std::size_t at = offset[b];
       picks(b, [&](std::size_t j, float r) {
-        picked[at++] = static_cast<std::uint64_t>(candidate(means_.order[j])) << 32 | std::bit_cast<std::uint32_t>(r);
+        const Index i = candidate(means_.order[j]);
+        largest[b] = std::max(largest[b], i);
+        picked[at++] = static_cast<std::uint64_t>(i) << 32 | std::bit_cast<std::uint32_t>(r);
       });
     });
     std::vector<std::uint64_t> tmp;
