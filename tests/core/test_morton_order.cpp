@@ -35,10 +35,25 @@ TEST_CASE("morton_order: a stable sort by the interleaved 10-bit cell codes") {
   std::vector<std::uint32_t> want(n);
   std::iota(want.begin(), want.end(), 0u);
   std::stable_sort(want.begin(), want.end(), [&](std::uint32_t a, std::uint32_t b) { return code[a] < code[b]; });
-  CHECK(vcar::morton_order(x.data(), y.data(), z.data(), n) == want);
+  const auto got = vcar::morton_order(x.data(), y.data(), z.data(), n);
+  CHECK(std::vector<std::uint32_t>(got.begin(), got.end()) == want);
   CHECK(vcar::morton_order(x.data(), y.data(), z.data(), 0).empty());
+  // By the code's top 20 or 10 bits: a stable sort by code >> 10 or >> 20 (cells of the coarser
+  // grid keep their position order).
+  for (int bits : {20, 10}) {
+    std::vector<std::uint32_t> coarse(n);
+    std::iota(coarse.begin(), coarse.end(), 0u);
+    std::stable_sort(coarse.begin(), coarse.end(),
+                     [&](std::uint32_t a, std::uint32_t b) { return code[a] >> (30 - bits) < code[b] >> (30 - bits); });
+    const auto by_bits = vcar::morton_order(x.data(), y.data(), z.data(), n, bits);
+    CHECK(std::vector<std::uint32_t>(by_bits.begin(), by_bits.end()) == coarse);
+    CHECK(coarse != want);  // the coarser sort is a different order here
+  }
+  CHECK_THROWS_AS(vcar::morton_order(x.data(), y.data(), z.data(), n, 0), vcar::Error);
+  CHECK_THROWS_AS(vcar::morton_order(x.data(), y.data(), z.data(), n, 31), vcar::Error);
   const float one = 1.f;
-  CHECK(vcar::morton_order(&one, &one, &one, 1) == std::vector<std::uint32_t>{0});
+  const auto single = vcar::morton_order(&one, &one, &one, 1);
+  CHECK(std::vector<std::uint32_t>(single.begin(), single.end()) == std::vector<std::uint32_t>{0});
 }
 
 TEST_CASE("morton_order: the same order for any thread count, across its blocks of points") {

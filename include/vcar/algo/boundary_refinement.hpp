@@ -333,7 +333,7 @@ class BoundaryRefinement {
         throw Error("candidate " + std::to_string(candidates_[k]) + " out of range (scene has " +
                     std::to_string(scene.size()) + " Gaussians)", "BoundaryRefinement");
     const auto means = detail::candidate_means(scene, candidates_);
-    const std::vector<std::uint32_t> order = morton_order(means[0].data(), means[1].data(), means[2].data(), n);
+    const auto order = morton_order(means[0].data(), means[1].data(), means[2].data(), n);
     // Geometry columns padded to whole chunk boxes: abr_geometry reads simd::width slots at a time.
     const std::size_t padded = (n + kBox - 1) / kBox * kBox;
     block_ = ColumnBlock(ColumnBlock::room<std::uint32_t>(n) + 15 * ColumnBlock::room<float>(padded) +

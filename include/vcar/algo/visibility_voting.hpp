@@ -39,6 +39,7 @@
 #include "vcar/core/morton_order.hpp"
 #include "vcar/core/parallel.hpp"
 #include "vcar/core/radix_sort.hpp"
+#include "vcar/core/scratch_vector.hpp"
 
 namespace vcar {
 
@@ -70,17 +71,20 @@ struct VoteView {
 // over uniform mask tiles (project_box, MaskTiles); only the other chunks are voted mean by mean.
 struct ChunkedMeans {
   static constexpr std::size_t chunk_size = 256;  // a multiple of mean_batch
-  std::vector<std::uint32_t> order;   // sorted position j -> candidate position
-  std::array<std::vector<float>, 3> xyz;  // sorted means, padded with NaN to whole chunks
+  scratch_vector<std::uint32_t> order;   // sorted position j -> candidate position
+  std::array<scratch_vector<float>, 3> xyz;  // sorted means, padded with NaN to whole chunks
   std::vector<std::array<float, 6>> box;  // per chunk: lo x, y, z, hi x, y, z
 
   static_assert(chunk_size % mean_batch == 0);
   ChunkedMeans() = default;
   ChunkedMeans(const float* x, const float* y, const float* z, std::size_t n) {
-    order = morton_order(x, y, z, n);
+    order = morton_order(x, y, z, n, 20);  // chunks need compact runs, not the finest order
     const std::size_t chunks = (n + chunk_size - 1) / chunk_size, padded = chunks * chunk_size;
     const float* src[3] = {x, y, z};
-    for (int d = 0; d < 3; ++d) xyz[d].assign(padded, std::numeric_limits<float>::quiet_NaN());
+    for (int d = 0; d < 3; ++d) {  // written below by the chunks' tasks, the padding here
+      xyz[d].resize(padded);
+      std::fill(xyz[d].begin() + static_cast<std::ptrdiff_t>(n), xyz[d].end(), std::numeric_limits<float>::quiet_NaN());
+    }
     box.resize(chunks);
     parallel_for(static_cast<std::int64_t>(chunks), [&](std::int64_t c) {  // each chunk its own means and box
       const std::size_t j0 = static_cast<std::size_t>(c) * chunk_size, j1 = std::min(n, j0 + chunk_size);
@@ -337,7 +341,7 @@ public:
       picks(b, [&](std::size_t, float) { ++offset[b + 1]; });
     });
     for (std::size_t b = 0; b < blocks; ++b) offset[b + 1] += offset[b];
-    std::vector<std::uint64_t> picked(offset[blocks]);  // scene index << 32 | bits of R
+    scratch_vector<std::uint64_t> picked(offset[blocks]);  // scene index << 32 | bits of R (each written once)
     parallel_for(static_cast<std::int64_t>(blocks), [&](std::int64_t bb) {
       const auto b = static_cast<std::size_t>(bb);
       std::size_t at = offset[b];
@@ -347,7 +351,7 @@ public:
         picked[at++] = static_cast<std::uint64_t>(i) << 32 | std::bit_cast<std::uint32_t>(r);
       });
     });
-    std::vector<std::uint64_t> tmp;
+    scratch_vector<std::uint64_t> tmp;
     sort_by_upper_word(picked, tmp, largest.empty() ? 0 : *std::max_element(largest.begin(), largest.end()));
     indices.resize(picked.size());
     ratios.resize(picked.size());
@@ -386,8 +390,17 @@ private:
       throw Error("need 1 to " + std::to_string(max_objects) + " objects, got " + std::to_string(n_objects), "voting");
     n_ = n; n_objects_ = n_objects;
     means_ = detail::ChunkedMeans(x, y, z, n);
-    visible_.assign(n, 0);
-    fg_.assign(n * static_cast<std::size_t>(n_objects), 0);
+    // Zeroed in fixed blocks in parallel (a serial fill kept the other threads waiting).
+    visible_.resize(n);
+    fg_.resize(n * static_cast<std::size_t>(n_objects));
+    for (auto* counters : {&visible_, &fg_}) {
+      constexpr std::size_t block = std::size_t{1} << 16;
+      const std::size_t size = counters->size();
+      parallel_for(static_cast<std::int64_t>((size + block - 1) / block), [&](std::int64_t b) {
+        const std::size_t k0 = static_cast<std::size_t>(b) * block;
+        std::fill(counters->data() + k0, counters->data() + std::min(size, k0 + block), std::uint16_t{0});
+      });
+    }
   }
   void check_view(const Camera& camera, std::span<const Mask* const> masks, int sign) const {
     const std::string where = "view '" + camera.name + "'";
@@ -420,8 +433,8 @@ private:
   mutable std::vector<std::uint32_t> rank_;    // candidate k -> sorted position (on first use)
   mutable std::vector<std::pair<Index, std::size_t>> by_index_;  // (scene index, position), sorted
   std::size_t views_ = 0;
-  mutable std::vector<std::uint16_t> visible_;  // V_i, by sorted position
-  mutable std::vector<std::uint16_t> fg_;       // F_i per object, object-major, by sorted position
+  mutable scratch_vector<std::uint16_t> visible_;  // V_i, by sorted position
+  mutable scratch_vector<std::uint16_t> fg_;       // F_i per object, object-major, by sorted position
   mutable std::vector<detail::VoteView> queue_;
   mutable std::vector<detail::ViewLanes> lanes_;  // the queued views' projections in SIMD lanes
   std::vector<MaskTiles> tiles_;                // per queued view and object: packed masks (capacity reused)

@@ -6,11 +6,14 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <string>
 #include <utility>
 #include <vector>
 
+#include "vcar/core/error.hpp"
 #include "vcar/core/parallel.hpp"
 #include "vcar/core/radix_sort.hpp"
+#include "vcar/core/scratch_vector.hpp"
 #include "vcar/core/simd.hpp"
 
 namespace vcar {
@@ -18,7 +21,13 @@ namespace vcar {
 // The order (positions 0..n-1) of the points (x[k], y[k], z[k]) sorted by the Morton code of
 // their position in the points' bounding box, 10 bits per axis; ties keep their position order,
 // so the order is deterministic. Non-finite coordinates count as the box's low corner.
-inline std::vector<std::uint32_t> morton_order(const float* x, const float* y, const float* z, std::size_t n) {
+// `bits` < 30 sorts by the code's top `bits` bits only (one radix pass per 10 bits): the points
+// of one cell of that coarser grid keep their position order. Voting, which only needs runs of
+// 256 points to be compact, sorts its million means by 20 bits (cells of about 1/100 of the box
+// per axis), two passes instead of three.
+inline scratch_vector<std::uint32_t> morton_order(const float* x, const float* y, const float* z, std::size_t n,
+                                                  int bits = 30) {
+  if (bits < 1 || bits > 30) throw Error("bits must be in 1..30, got " + std::to_string(bits), "morton_order");
   // Fixed blocks of points (not of threads): every step below gives the same result for any
   // thread count. Each block finds its bounds and computes its keys; the sort is blocked too.
   constexpr std::size_t block = std::size_t{1} << 16;
@@ -54,8 +63,10 @@ inline std::vector<std::uint32_t> morton_order(const float* x, const float* y, c
     v = (v | (v << 2)) & V(0x09249249);
     return v;
   };
-  // Keys (code << 32 | position): sorting them by their upper 30 bits keeps ties in position order.
-  std::vector<std::uint64_t> key(n), tmp;
+  // Keys (code's top `bits` << 32 | position): a stable sort by their upper word keeps ties in
+  // position order.
+  const int drop = 30 - bits;
+  scratch_vector<std::uint64_t> key(n), tmp;  // written whole below (not zeroed first)
   parallel_for(blocks, [&](std::int64_t b) {
     const auto [k0, k1] = range(b);
     std::size_t k = k0;
@@ -75,7 +86,7 @@ inline std::vector<std::uint32_t> morton_order(const float* x, const float* y, c
       }
       m.store_aligned(codes);
       for (std::size_t l = 0; l < L; ++l)
-        key[k + l] = (static_cast<std::uint64_t>(static_cast<std::uint32_t>(codes[l])) << 32) | (k + l);
+        key[k + l] = (static_cast<std::uint64_t>(static_cast<std::uint32_t>(codes[l]) >> drop) << 32) | (k + l);
     }
     for (; k < k1; ++k) {
       std::uint32_t m = 0;
@@ -85,11 +96,11 @@ inline std::vector<std::uint32_t> morton_order(const float* x, const float* y, c
         const float q = t >= 0.f ? std::min(1023.f, t) : 0.f;  // NaN -> 0
         m |= spread(static_cast<std::uint32_t>(q)) << d;
       }
-      key[k] = (static_cast<std::uint64_t>(m) << 32) | k;
+      key[k] = (static_cast<std::uint64_t>(m >> drop) << 32) | k;
     }
   });
-  sort_by_upper_word(key, tmp, (1u << 30) - 1);  // stable by the 30-bit code
-  std::vector<std::uint32_t> order(n);
+  sort_by_upper_word(key, tmp, (1u << bits) - 1);  // stable by the code's top bits
+  scratch_vector<std::uint32_t> order(n);
   parallel_for(blocks, [&](std::int64_t b) {
     const auto [k0, k1] = range(b);
     for (std::size_t k = k0; k < k1; ++k) order[k] = static_cast<std::uint32_t>(key[k]);

@@ -4,6 +4,7 @@
 // means (core/morton_order.hpp) and the selections that voting returns in scene-index order.
 #include <algorithm>
 #include <array>
+#include <concepts>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -16,7 +17,11 @@ namespace vcar {
 // blocks of records (not of threads), so the result is the same for any thread count: each
 // block counts its digits and scatters its records at offsets taken digit-major, then in block
 // order.
-inline void sort_by_upper_word(std::vector<std::uint64_t>& v, std::vector<std::uint64_t>& tmp, std::uint32_t largest) {
+// `Vector`: a std::vector of std::uint64_t with any allocator (a scratch_vector's `tmp` is not
+// zeroed first).
+template <class Vector>
+  requires std::same_as<typename Vector::value_type, std::uint64_t>
+void sort_by_upper_word(Vector& v, Vector& tmp, std::uint32_t largest) {
   constexpr std::size_t block = std::size_t{1} << 16, digits = 1024;
   const std::size_t n = v.size();
   const auto blocks = static_cast<std::int64_t>((n + block - 1) / block);
