@@ -32,9 +32,9 @@ TEST_CASE("scratch_vector: types with constructors are still constructed") {
   CHECK(s[2].empty());
   s.emplace_back(4, 'x');                 // arguments are forwarded
   CHECK(s.back() == "xxxx");
-  struct Counted {
+  struct WithDefault {
     int value = 5;
   };
-  vcar::scratch_vector<Counted> c(4);
+  vcar::scratch_vector<WithDefault> c(4);
   CHECK(c[3].value == 5);
 }

@@ -393,14 +393,11 @@ private:
     // Zeroed in fixed blocks in parallel (a serial fill kept the other threads waiting).
     visible_.resize(n);
     fg_.resize(n * static_cast<std::size_t>(n_objects));
-    for (auto* counters : {&visible_, &fg_}) {
-      constexpr std::size_t block = std::size_t{1} << 16;
-      const std::size_t size = counters->size();
-      parallel_for(static_cast<std::int64_t>((size + block - 1) / block), [&](std::int64_t b) {
-        const std::size_t k0 = static_cast<std::size_t>(b) * block;
-        std::fill(counters->data() + k0, counters->data() + std::min(size, k0 + block), std::uint16_t{0});
-      });
-    }
+    for (auto* counters : {&visible_, &fg_})
+      parallel_chunks(static_cast<std::int64_t>(counters->size()), std::int64_t{1} << 16,
+                      [&](std::int64_t, std::int64_t b, std::int64_t e) {
+                        std::fill(counters->data() + b, counters->data() + e, std::uint16_t{0});
+                      });
   }
   void check_view(const Camera& camera, std::span<const Mask* const> masks, int sign) const {
     const std::string where = "view '" + camera.name + "'";
