@@ -3,6 +3,7 @@
 // masks held in memory. Timed in the same run:
 //   - one CPU render of the scene at that size (the budget a re-selection should stay under);
 //   - vcar::segment with the masks as its segmenter, SSS off (the paper's vote, nvos preset);
+//   - a render and vcar::segment in turn, as a viewer runs them: the median ratio of 9 pairs;
 //   - vcar::Reselection: setting every mask (the full vote) + select, then one mask changed +
 //     select, with ABR from scratch and incremental (its coarse_voting line is the vote's share);
 // at 1 thread and at every available thread. Checks that Reselection's selection and log-scales
@@ -102,6 +103,26 @@ int main(int argc, char** argv) {
       (stage == "total" ? total : staged) += s;
     }
     std::printf("  %-44s %8d %10.4f\n", "(outside the stages)", t, total - staged);
+    // As a viewer runs them: a frame, then a re-selection, in turn, so that each finds the
+    // caches as the other left them. The median of the pairs' ratios: both see the same noise.
+    {
+      std::vector<double> ratio, tr, ts;
+      for (int r = 0; r < 9; ++r) {
+        tr.push_back(median_seconds(1, [&] {
+          vcar::RenderRequest q;
+          q.scene = &world.scene;
+          q.camera = &rig.train[0];
+          (void)renderer.render(q);
+        }));
+        ts.push_back(median_seconds(1, [&] {
+          (void)vcar::segment(world.scene, rig.train, vcar::Prompt{}, renderer, segmenter, params);
+        }));
+        ratio.push_back(ts.back() / tr.back());
+      }
+      for (auto* v : {&ratio, &tr, &ts}) std::sort(v->begin(), v->end());
+      std::printf("%-46s %8d %10.4f   (render %.4f, vcar::segment %.4f: medians of 9 pairs)\n",
+                  "render, then vcar::segment, in turn: ratio", t, ratio[4], tr[4], ts[4]);
+    }
 
     std::optional<vcar::Reselection> session;
     const double build = median_seconds(1, [&] { session.emplace(world.scene, rig.train, params); });
