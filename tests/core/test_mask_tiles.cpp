@@ -112,6 +112,59 @@ TEST_CASE("MaskTiles: the summary of a large mask (tile rows counted in parallel
   CHECK(many.classify(W - 8, H - 5, W - 1, H - 1) == MaskTiles::foreground);  // the corner tile
 }
 
+TEST_CASE("MaskTiles: counts kept in 16-bit halves stay exact past 65535 tiles; larger rectangles are mixed") {
+  // 2400 x 2056 px: 300 x 257 = 77100 tiles, so the integral counts wrap around 2^16.
+  const int W = 2400, H = 2056, TW = W / 8, TH = H / 8;
+  Mask m(W, H, 1, 0);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      const float dx = static_cast<float>(x - 1300), dy = static_cast<float>(y - 1000);
+      m(x, y) = dx * dx / (1000.f * 1000.f) + dy * dy / (900.f * 900.f) < 1.f || y < 300 ? 255 : 0;
+    }
+  MaskTiles t;
+  t.build(m);
+  // Each tile's content by brute force, then any rectangle of whole tiles from those.
+  std::vector<int> tile(static_cast<std::size_t>(TW) * TH);
+  for (int ty = 0; ty < TH; ++ty)
+    for (int tx = 0; tx < TW; ++tx) tile[static_cast<std::size_t>(ty) * TW + tx] = brute(m, tx * 8, ty * 8, tx * 8 + 7, ty * 8 + 7);
+  auto rect = [&](int a, int c, int b, int d) {  // tiles [a, b] x [c, d]
+    bool fg = false, bg = false;
+    for (int ty = c; ty <= d; ++ty)
+      for (int tx = a; tx <= b; ++tx) {
+        const int v = tile[static_cast<std::size_t>(ty) * TW + tx];
+        fg = fg || v != 0;
+        bg = bg || v != 2;
+      }
+    return fg && bg ? 1 : fg ? 2 : 0;
+  };
+  std::mt19937 rng(8);
+  std::uniform_int_distribution<int> TX(0, TW - 1), TY(0, TH - 1);
+  int answers[3] = {0, 0, 0}, large = 0;
+  for (int k = 0; k < 400; ++k) {
+    int a = TX(rng), b = TX(rng), c = TY(rng), d = TY(rng);
+    if (a > b) std::swap(a, b);
+    if (c > d) std::swap(c, d);
+    if ((b - a + 1) * (d - c + 1) > 65535) continue;
+    large += (b - a + 1) * (d - c + 1) > 20000;
+    const int want = rect(a, c, b, d);
+    ++answers[want];
+    CHECK(static_cast<int>(t.classify(a * 8, c * 8, b * 8 + 7, d * 8 + 7)) == want);
+  }
+  CHECK(answers[0] > 0);
+  CHECK(answers[1] > 0);
+  CHECK(answers[2] > 0);
+  CHECK(large > 10);
+  // All foreground: 255 x 257 = 65535 tiles are foreground; 256 x 256 = 65536 tiles (a count of
+  // 2^16, 0 in 16 bits) are mixed, never background.
+  t.build(Mask(W, H, 1, 255));
+  CHECK(t.classify(0, 0, 255 * 8 - 1, 257 * 8 - 1) == MaskTiles::foreground);
+  CHECK(t.classify(0, 0, 256 * 8 - 1, 256 * 8 - 1) == MaskTiles::mixed);
+  CHECK(t.classify(0, 0, W - 1, H - 1) == MaskTiles::mixed);
+  t.build(Mask(W, H, 1, 0));
+  CHECK(t.classify(0, 0, 255 * 8 - 1, 257 * 8 - 1) == MaskTiles::background);
+  CHECK(t.classify(0, 0, W - 1, H - 1) == MaskTiles::mixed);
+}
+
 TEST_CASE("MaskTiles: packed bits, one 64-bit word per 8 x 8 tile, equal the mask and are 0 past its edges") {
   std::mt19937 rng(9);
   for (auto [W, H] : {std::pair{64, 48}, std::pair{37, 29}, std::pair{8, 1}, std::pair{1000, 700}}) {

@@ -7,10 +7,13 @@
 // of Morton-ordered means). Foreground = nonzero byte, as everywhere in voting; pixels past the
 // image's right and bottom edges are 0.
 //
-// The summary: two integral images over the tile grid count the tiles with some foreground pixel
-// and the tiles whose pixels are all foreground. The answer is exact for "none" and "all" and
+// The summary: one integral image over the tile grid counts, in the low 16 bits of each 32-bit
+// entry, the tiles with some foreground pixel and, in the high 16, the tiles whose pixels are all
+// foreground (the entries wrap modulo 2^32; a rectangle's count, taken modulo 2^32 as well, is
+// exact in both halves while it covers at most 65535 tiles). Both counts of a corner are in one
+// load: half the bytes and lines of two images. The answer is exact for "none" and "all" and
 // conservative otherwise (a rectangle that covers part of a mixed tile is "mixed" even if its own
-// pixels agree).
+// pixels agree; so is one of more than 65535 tiles, 4.2 Mpx).
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
@@ -123,17 +126,18 @@ public:
     if (x0 > x1 || y0 > y1) return background;
     const int a = x0 / tile, b = y0 / tile, c = x1 / tile + 1, d = y1 / tile + 1;
     const std::size_t stride = static_cast<std::size_t>(tw_) + 1;
-    auto sum = [&](const std::vector<std::uint32_t>& I) {
-      return I[d * stride + c] - I[b * stride + c] - I[d * stride + a] + I[b * stride + a];
-    };
-    if (sum(any_) == 0) return background;
-    if (sum(all_) == static_cast<std::uint32_t>((c - a) * (d - b))) return foreground;
+    const std::uint32_t tiles = static_cast<std::uint32_t>((c - a) * (d - b));
+    if (tiles > 0xffffu) return mixed;  // the 16-bit halves below hold counts of up to 65535 tiles
+    const std::uint32_t* I = counts_.data();
+    const std::uint32_t sum = I[d * stride + c] - I[b * stride + c] - I[d * stride + a] + I[b * stride + a];
+    if ((sum & 0xffffu) == 0) return background;
+    if ((sum >> 16) == tiles) return foreground;
     return mixed;
   }
 
-  // Bytes held: tile words and the two integral images.
+  // Bytes held: tile words and the integral image.
   std::size_t bytes() const {
-    return words_.capacity() * sizeof(std::uint64_t) + (any_.capacity() + all_.capacity()) * sizeof(std::uint32_t);
+    return words_.capacity() * sizeof(std::uint64_t) + counts_.capacity() * sizeof(std::uint32_t);
   }
 
 private:
@@ -144,8 +148,7 @@ private:
     tw_ = (w + tile - 1) / tile;
     th_ = (h + tile - 1) / tile;
     words_.resize(static_cast<std::size_t>(tw_) * th_);
-    any_.resize((static_cast<std::size_t>(tw_) + 1) * (static_cast<std::size_t>(th_) + 1));
-    all_.resize(any_.size());
+    counts_.resize((static_cast<std::size_t>(tw_) + 1) * (static_cast<std::size_t>(th_) + 1));
   }
   // pack_tile_row(ty) writes tile row ty's words; each row is counted by the thread that packed
   // it (tile rows in parallel for large masks), then the summary is integrated.
@@ -161,34 +164,30 @@ private:
       for (int ty = 0; ty < th_; ++ty) pack_and_count(ty);
     integrate_rows();
   }
-  // The summary, in two steps. count_tile_row(ty) writes row ty + 1 of both integral images as
+  // The summary, in two steps. count_tile_row(ty) writes row ty + 1 of the integral image as
   // counts along tile row ty only (the packer's thread, right after packing it; column 0 is 0);
-  // integrate_rows() then adds each row to the one below it, which makes them the integral
-  // images of "some foreground" and "all foreground" over the tile grid (row 0 is 0).
+  // integrate_rows() then adds each row to the one below it, which makes it the integral image
+  // of "some foreground" | "all foreground" << 16 over the tile grid (row 0 is 0).
   void count_tile_row(int ty) {
     const std::size_t stride = static_cast<std::size_t>(tw_) + 1;
     if (tw_ == 0) {  // an image 0 pixels wide: the row is its column 0
-      any_[(static_cast<std::size_t>(ty) + 1) * stride] = all_[(static_cast<std::size_t>(ty) + 1) * stride] = 0;
+      counts_[(static_cast<std::size_t>(ty) + 1) * stride] = 0;
       return;
     }
     const int rest_x = width_ - (tw_ - 1) * tile, rest_y = height_ - (th_ - 1) * tile;
     const int rows = ty + 1 < th_ ? tile : rest_y;
     const std::uint64_t* w = words_.data() + static_cast<std::size_t>(ty) * tw_;
-    std::uint32_t* any = any_.data() + (static_cast<std::size_t>(ty) + 1) * stride;
-    std::uint32_t* all = all_.data() + (static_cast<std::size_t>(ty) + 1) * stride;
+    std::uint32_t* out = counts_.data() + (static_cast<std::size_t>(ty) + 1) * stride;
     // A tile's in-image pixels: the low `cols` bits in each of its first `rows` bytes.
     const std::uint64_t row_bytes = 0x0101010101010101ULL >> (8 * (tile - rows));
     const std::uint64_t full = 0xffULL * row_bytes, last = ((1ULL << rest_x) - 1) * row_bytes;
-    std::uint32_t run_any = 0, run_all = 0;
-    any[0] = all[0] = 0;
-    for (int tx = 0; tx + 1 < tw_; ++tx) {
-      run_any += w[tx] != 0;
-      run_all += w[tx] == full;
-      any[tx + 1] = run_any;
-      all[tx + 1] = run_all;
-    }
-    any[tw_] = run_any + (w[tw_ - 1] != 0);  // the last tile, perhaps partial
-    all[tw_] = run_all + (w[tw_ - 1] == last);
+    auto count = [](std::uint64_t word, std::uint64_t all) {  // some foreground | all foreground << 16
+      return static_cast<std::uint32_t>(word != 0) + (static_cast<std::uint32_t>(word == all) << 16);
+    };
+    std::uint32_t run = 0;
+    out[0] = 0;
+    for (int tx = 0; tx + 1 < tw_; ++tx) out[tx + 1] = run += count(w[tx], full);
+    out[tw_] = run + count(w[tw_ - 1], last);  // the last tile, perhaps partial
   }
   // Sets pixels [x0, x1) of one image row in a row of tile words, `shift` = 8 * (y % 8).
   static void set_bits(std::uint64_t* out, int x0, int x1, int shift) {
@@ -205,15 +204,12 @@ private:
   }
   void integrate_rows() {
     const std::size_t stride = static_cast<std::size_t>(tw_) + 1;
-    std::fill(any_.begin(), any_.begin() + static_cast<std::ptrdiff_t>(stride), 0u);
-    std::fill(all_.begin(), all_.begin() + static_cast<std::ptrdiff_t>(stride), 0u);
-    for (std::size_t at = stride; at < any_.size(); at += stride) {
-      add_row(any_.data() + at, any_.data() + at - stride, stride);
-      add_row(all_.data() + at, all_.data() + at - stride, stride);
-    }
+    std::fill(counts_.begin(), counts_.begin() + static_cast<std::ptrdiff_t>(stride), 0u);
+    for (std::size_t at = stride; at < counts_.size(); at += stride)
+      add_row(counts_.data() + at, counts_.data() + at - stride, stride);
   }
   static void add_row(std::uint32_t* row, const std::uint32_t* above, std::size_t count) {
-    using BI = simd::batch<std::int32_t>;  // counts < 2^31: the same sums
+    using BI = simd::batch<std::int32_t>;  // wrapping adds: the same bits as uint32_t's
     auto* r = reinterpret_cast<std::int32_t*>(row);
     const auto* a = reinterpret_cast<const std::int32_t*>(above);
     std::size_t x = 0;
@@ -224,7 +220,7 @@ private:
 
   int width_ = 0, height_ = 0, tw_ = 0, th_ = 0;
   std::vector<std::uint64_t> words_;       // the packed tiles
-  std::vector<std::uint32_t> any_, all_;   // integral counts over the tile grid
+  std::vector<std::uint32_t> counts_;      // integral counts over the tile grid: some fg | all fg << 16 (mod 2^32)
   std::vector<std::pair<std::size_t, std::size_t>> first_run_;  // build(RleMask): per tile row, run and its start
 };
 
