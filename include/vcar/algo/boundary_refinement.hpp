@@ -496,9 +496,10 @@ class BoundaryRefinement {
     const std::uint32_t* gate = v.gate.data();
     const std::uint16_t view = v.id;
     const MaskTiles* tiles = v.pixels ? nullptr : &v.packed;
-    auto want = [&](std::size_t k) { return !expected_ || n_ovf_[k] >= gate[n_vis_[k]]; };
+    GateWant want{*this, gate};
     if (!defer_) {
-      auto apply = [&](std::size_t k, const AbrObservation& obs) { add(k, obs, view); };
+      auto add_one = [&](std::size_t k, const AbrObservation& obs) { add(k, obs, view); };
+      CountInside<decltype(add_one)> apply{*this, add_one};
       Always trace;
       observe_boxes(vc, b, e, boxes, tiles, v.pixels, want, apply, trace, idle);
     } else {
@@ -506,13 +507,42 @@ class BoundaryRefinement {
       // this view counted as overflowing, is above rho; the slots left untraced are marked.
       const float rho = params_.rho;
       auto trace = [&](std::size_t k) { return static_cast<float>(n_ovf_[k] + 1) > rho * static_cast<float>(n_vis_[k] + 1); };
-      auto apply = [&](std::size_t k, const AbrObservation& obs) {
+      auto add_one = [&](std::size_t k, const AbrObservation& obs) {
         if (obs.overflow && !trace(k)) untraced_[k] = 1;  // before add(): the counts observe_boxes read
         add(k, obs, view);
       };
+      CountInside<decltype(add_one)> apply{*this, add_one};
       observe_boxes(vc, b, e, boxes, tiles, v.pixels, want, apply, trace, idle);
     }
   }
+  // observe_added_boxes' want: expect_views' gate can still open (every slot without it), slot
+  // by slot or a whole batch at once (lanes: the gate table gathered at the batch's n_vis).
+  struct GateWant {
+    const BoundaryRefinement& r;
+    const std::uint32_t* gate;
+    bool operator()(std::size_t k) const { return !r.expected_ || r.n_ovf_[k] >= gate[r.n_vis_[k]]; }
+    unsigned lanes(std::size_t j) const {  // bit l: operator()(j + l), l < simd::width
+      constexpr std::size_t L = simd::width;
+      if (!r.expected_) return static_cast<unsigned>((std::uint64_t{1} << L) - 1);
+      using BI = simd::batch<std::int32_t>;
+      alignas(64) std::int32_t vis[L], ovf[L];
+      for (std::size_t l = 0; l < L; ++l) vis[l] = r.n_vis_[j + l], ovf[l] = r.n_ovf_[j + l];
+      const BI opening = simd::gather(reinterpret_cast<const std::int32_t*>(gate), BI::load_aligned(vis));
+      return simd::nonzero_lanes(simd::select(BI::load_aligned(ovf) >= opening, BI(1), BI(0)));
+    }
+  };
+  // observe_added_boxes' apply: `one` per observation, and for a batch's lanes that are eligible
+  // without overflow (add() counts n_vis only) one add over the batch.
+  template <class One>
+  struct CountInside {
+    BoundaryRefinement& r;
+    One& one;
+    void operator()(std::size_t k, const AbrObservation& obs) const { one(k, obs); }
+    void inside(std::size_t j, unsigned bits) const {  // bit l: slot j + l, l < simd::width
+      std::uint16_t* v = r.n_vis_.data() + j;
+      for (std::size_t l = 0; l < simd::width; ++l) v[l] = static_cast<std::uint16_t>(v[l] + ((bits >> l) & 1u));
+    }
+  };
   const Mask& decoded(const Mask& mask) { return mask; }
   const Mask& decoded(const RleMask& mask) { return decoder_.decode(mask); }
 
@@ -859,7 +889,7 @@ class BoundaryRefinement {
       if (idle && idle[c]) continue;  // no wanted slot since an earlier view
       const std::size_t j0 = c * kBox, j1 = std::min(size(), j0 + kBox);
       bool any = false;
-      for (std::size_t k = j0; k < j1 && !any; ++k) any = want(k);
+      for (std::size_t j = j0; j < j1 && !any; j += simd::width) any = wanted_lanes(want, j, std::min(simd::width, j1 - j)) != 0;
       if (!any) {
         if (idle) idle[c] = 1;  // this task's box only
         continue;
@@ -868,8 +898,10 @@ class BoundaryRefinement {
                     : MaskTiles::mixed) {
         case MaskTiles::background: continue;  // no centre on foreground: none eligible (B.1)
         case MaskTiles::foreground:            // every centre and endpoint on foreground
-          for (std::size_t k = j0; k < j1; ++k)
-            if (want(k)) apply(k, inside);
+          for (std::size_t j = j0; j < j1; j += simd::width) {
+            const std::size_t lanes = std::min(simd::width, j1 - j);
+            apply_inside(apply, j, lanes, wanted_lanes(want, j, lanes), inside);
+          }
           continue;
         case MaskTiles::mixed: break;
       }
@@ -880,8 +912,7 @@ class BoundaryRefinement {
       for (std::size_t j = j0; j < j1; j += simd::width) {
         const std::size_t lanes = std::min(simd::width, j1 - j);
         // Bit l: slot j + l is wanted; every lane tested without a branch (most are wanted).
-        unsigned wanted = 0;
-        for (std::size_t l = 0; l < lanes; ++l) wanted |= static_cast<unsigned>(want(j + l)) << l;
+        const unsigned wanted = wanted_lanes(want, j, lanes);
         if (!wanted) continue;
         geometry(C, j, g);
         // B.1 and rule (e) per lane: with the tiles every lane's centre and endpoint lookups at
@@ -900,7 +931,7 @@ class BoundaryRefinement {
         using BI = simd::batch<std::int32_t>;
         const unsigned eligible = wanted & simd::nonzero_lanes(BI::load_aligned(centre));
         const unsigned overflowing = eligible & simd::nonzero_lanes(BI::load_aligned(a.outside));
-        for (unsigned m = eligible & ~overflowing; m; m &= m - 1) apply(j + static_cast<std::size_t>(std::countr_zero(m)), inside);
+        apply_inside(apply, j, lanes, eligible & ~overflowing, inside);
         unsigned traced = 0;
         for (unsigned m = overflowing; m; m &= m - 1) {
           const auto l = static_cast<std::size_t>(std::countr_zero(m));
@@ -923,6 +954,25 @@ class BoundaryRefinement {
         }
       }
     }
+  }
+
+  // Bit l: want(j + l), for the `lanes` slots from j; want.lanes(j) for a whole batch when Want
+  // has it.
+  template <class Want>
+  static unsigned wanted_lanes(Want& want, std::size_t j, std::size_t lanes) {
+    if constexpr (requires { want.lanes(j); })
+      if (lanes == simd::width) return want.lanes(j);
+    unsigned bits = 0;
+    for (std::size_t l = 0; l < lanes; ++l) bits |= static_cast<unsigned>(want(j + l)) << l;
+    return bits;
+  }
+  // apply(j + l, inside) for each bit l of `bits` (l < lanes); apply.inside(j, bits) for a whole
+  // batch when Apply has it.
+  template <class Apply>
+  static void apply_inside(Apply& apply, std::size_t j, std::size_t lanes, unsigned bits, const AbrObservation& inside) {
+    if constexpr (requires { apply.inside(j, bits); })
+      if (lanes == simd::width) return apply.inside(j, bits);
+    for (unsigned m = bits; m; m &= m - 1) apply(j + static_cast<std::size_t>(std::countr_zero(m)), inside);
   }
 
   // Per lane of g, from `tiles` (the view's mask in bits): centre[l] = 1 when the centre lies
