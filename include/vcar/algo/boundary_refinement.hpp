@@ -50,6 +50,7 @@
 #include "vcar/core/projection.hpp"
 #include "vcar/core/rle_mask.hpp"
 #include "vcar/core/rotation.hpp"
+#include "vcar/core/scratch_vector.hpp"
 
 namespace vcar {
 
@@ -339,32 +340,47 @@ class BoundaryRefinement {
     block_ = ColumnBlock(ColumnBlock::room<std::uint32_t>(n) + 15 * ColumnBlock::room<float>(padded) +
                          6 * ColumnBlock::room<float>(n) + 5 * ColumnBlock::room<std::uint16_t>(n));
     slot_ = block_.take<std::uint32_t>(n);
-    auto column = [&]<class T>(std::span<T>& c, std::size_t size, T value, std::size_t from) {
+    auto column = [&]<class T>(std::span<T>& c, std::size_t size) {  // slots past n: 0
       c = block_.take<T>(size);
-      std::fill(c.begin() + static_cast<std::ptrdiff_t>(from), c.end(), value);
+      std::fill(c.begin() + static_cast<std::ptrdiff_t>(n), c.end(), T{});
     };
-    for (auto& c : mu_) column(c, padded, 0.f, n);  // the fill below writes slots < n
-    for (auto& c : rot_) column(c, padded, 0.f, n);
-    for (auto& c : s_) column(c, padded, 0.f, n);
-    for (auto& c : log_s_) column(c, n, 0.f, n);
-    for (auto& c : f_) column(c, n, std::numeric_limits<float>::infinity(), 0);
-    for (auto& c : arg_) column(c, n, no_view, 0);
-    column(n_vis_, n, std::uint16_t{0}, 0);
-    column(n_ovf_, n, std::uint16_t{0}, 0);
+    for (auto& c : mu_) column(c, padded);  // the fill below writes slots < n
+    for (auto& c : rot_) column(c, padded);
+    for (auto& c : s_) column(c, padded);
+    for (auto& c : log_s_) column(c, n);
+    for (auto& c : f_) column(c, n);
+    for (auto& c : arg_) column(c, n);
+    column(n_vis_, n);
+    column(n_ovf_, n);
     for (std::size_t j = 0; j < n; ++j) slot_[order[j]] = static_cast<std::uint32_t>(j);  // slot j: candidate order[j]
-    // In candidate order: the scene's columns are read in the candidates' (usually ascending)
-    // order rather than gathered in Morton order, which misses the cache on every read.
+    // In two passes. First in candidate order: the scene's columns are read in the candidates'
+    // (usually ascending) order rather than gathered in Morton order, which misses the cache on
+    // every read, and each candidate's 10 values go to its slot's record, one cache line. Then
+    // in slot order, each record's columns are written in sequence: 15 writes per candidate
+    // scattered over 15 columns missed the cache on every write.
+    struct alignas(64) Record {
+      float mu[3], log_s[3], q[4];
+    };
+    scratch_vector<Record> record(n);  // every slot written below
     parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t kk) {
       const auto k = static_cast<std::size_t>(kk);
-      const std::size_t i = candidates_[k], j = slot_[k];
+      const std::size_t i = candidates_[k];
+      Record& r = record[slot_[k]];
+      for (int d = 0; d < 3; ++d) r.mu[d] = scene.mean[d][i], r.log_s[d] = scene.log_scale[d][i];
+      for (int e = 0; e < 4; ++e) r.q[e] = scene.rotation[e][i];
+    });
+    parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {
+      const auto j = static_cast<std::size_t>(jj);
+      const Record& r = record[j];
       for (int d = 0; d < 3; ++d) {
-        mu_[d][j] = scene.mean[d][i];
-        log_s_[d][j] = scene.log_scale[d][i];
-        s_[d][j] = std::exp(log_s_[d][j]);
+        mu_[d][j] = r.mu[d];
+        log_s_[d][j] = r.log_s[d];
+        s_[d][j] = std::exp(r.log_s[d]);
       }
-      const Eigen::Matrix3f R = rotation_from_quaternion(scene.rotation[0][i], scene.rotation[1][i],
-                                                         scene.rotation[2][i], scene.rotation[3][i]);
+      const Eigen::Matrix3f R = rotation_from_quaternion(r.q[0], r.q[1], r.q[2], r.q[3]);
       for (int e = 0; e < 9; ++e) rot_[e][j] = R(e % 3, e / 3);
+      for (int d = 0; d < 3; ++d) f_[d][j] = std::numeric_limits<float>::infinity(), arg_[d][j] = no_view;  // no view yet
+      n_vis_[j] = n_ovf_[j] = 0;
     });
     // Chunk boxes of the centres and the largest max_d s_d^2 per chunk (the bound of add_view).
     const std::size_t chunks = (n + kBox - 1) / kBox;
