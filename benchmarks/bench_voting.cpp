@@ -179,8 +179,10 @@ int main(int argc, char** argv) {
     if (std::fgets(buf, sizeof buf, f)) std::printf("load average at the end: %s", buf);
     std::fclose(f);
   }
+  vcar::MaskTiles packed;
+  packed.build(vcar::Mask(W, H, 1, 0));
   std::printf("memory per Gaussian: %zu bytes of counters (uint16 visible + uint16 foreground);"
-              " per queued view: %zu bytes of packed mask\n", 2 * sizeof(std::uint16_t),
-              (static_cast<std::size_t>(W) * H + 7) / 8);
+              " per queued view: %zu bytes of packed mask with its tile summary\n", 2 * sizeof(std::uint16_t),
+              packed.bytes());
   return 0;
 }
