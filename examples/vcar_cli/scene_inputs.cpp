@@ -13,7 +13,9 @@ namespace vcar::cli {
 
 GaussianScene load_scene(const std::filesystem::path& ply) {
   if (!std::filesystem::exists(ply)) throw CliError(exit_bad_input, "no such file", ply.string() + " (--scene)");
-  GaussianScene s = io::read_scene(ply);  // PLY, compressed PLY, SPZ or .splat, by content
+  InfiniteOpacities infinite;
+  GaussianScene s = io::read_scene(ply, nullptr, &infinite);  // PLY, compressed PLY, SPZ or .splat, by content
+  if (infinite.total()) warn(ply.string() + ": " + infinite.message());
   if (s.empty()) throw CliError(exit_bad_input, "the scene has no Gaussians", ply.string());
   return s;
 }

@@ -60,6 +60,12 @@ Scene& scene_from(py::handle obj) {
 
 namespace {
 
+// A Python UserWarning, once per file read: "<path>: N Gaussians had infinite opacity logits: ...".
+void warn_infinite_opacities(const fs::path& path, const InfiniteOpacities& infinite) {
+  const std::string text = path.string() + ": " + infinite.message();
+  if (PyErr_WarnEx(PyExc_UserWarning, text.c_str(), 1) != 0) throw py::error_already_set();
+}
+
 // A view of a vector owned by the Scene `self` (kept alive by the view).
 py::array_t<float> view(py::handle self, std::vector<float>& v, std::vector<py::ssize_t> shape) {
   std::vector<py::ssize_t> strides(shape.size());
@@ -241,10 +247,12 @@ quaternions raise vcar.Error naming the array and row.)doc")
       "read_ply",
       [](const fs::path& path) {
         GaussianScene g;
+        InfiniteOpacities infinite;
         {
           py::gil_scoped_release nogil;
-          g = io::read_ply(path);
+          g = io::read_ply(path, &infinite);
         }
+        if (infinite.total()) warn_infinite_opacities(path, infinite);
         return Scene::from_cpp(std::move(g));
       },
       py::arg("path"), "Reads an Inria 3DGS PLY (binary or ASCII, SH degree 0-3; docs/formats.md).");
@@ -252,10 +260,12 @@ quaternions raise vcar.Error naming the array and row.)doc")
       "read_scene",
       [](const fs::path& path) {
         GaussianScene g;
+        InfiniteOpacities infinite;
         {
           py::gil_scoped_release nogil;
-          g = io::read_scene(path);
+          g = io::read_scene(path, nullptr, &infinite);
         }
+        if (infinite.total()) warn_infinite_opacities(path, infinite);
         return Scene::from_cpp(std::move(g));
       },
       py::arg("path"), "Reads any scene file vcar knows, by content: PLY, compressed PLY, SPZ, .splat.");

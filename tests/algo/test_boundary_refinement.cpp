@@ -29,7 +29,7 @@ vcar::Camera camera(int w = 200, int h = 100, std::string name = "front") {
 }
 
 // Foreground where col < edge_col: a straight vertical mask edge at u = edge_col.
-vcar::Mask left_of(int edge_col, int w = 200, int h = 100) {
+vcar::Mask left_part(int edge_col, int w = 200, int h = 100) {
   vcar::Mask m(w, h, 1, 0);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < std::min(edge_col, w); ++x) m(x, y) = 255;
@@ -149,7 +149,7 @@ TEST_CASE("a Gaussian straddling a vertical mask edge: Eq. 13 by hand, long axis
   REQUIRE(h.f > 0.1);
   REQUIRE(h.f < 1.0);
   vcar::BoundaryRefinement abr(g, {0});
-  abr.add_view(camera(), left_of(110));
+  abr.add_view(camera(), left_part(110));
   CHECK(abr.n_vis(0) == 1);
   CHECK(abr.n_ovf(0) == 1);
   const auto r = abr.finish();
@@ -169,7 +169,7 @@ TEST_CASE("the dominant axis follows the projection, not the axis index") {
   const float c = std::sqrt(0.5f);
   const auto g = one_gaussian({0.1f, 0.5f, 1.f}, {c, 0.f, 0.f, c});
   const Hand h = hand(0.5, 110);
-  const auto r = run(g, {left_of(110)});
+  const auto r = run(g, {left_part(110)});
   CHECK(r.axis_compressed[0] == 0b010);
   CHECK(factor(r, g, 1) == Approx(h.f).epsilon(1e-5));
   CHECK(r.log_scale[0][0] == g.log_scale[0][0]);
@@ -181,13 +181,13 @@ TEST_CASE("two views with different factors: the minimum is taken") {
   const Hand h110 = hand(0.5, 110), h108 = hand(0.5, 108);
   REQUIRE(h108.f < h110.f);
   REQUIRE(h108.f > 0.1);
-  CHECK(factor(run(g, {left_of(110), left_of(108)}), g, 0) == Approx(h108.f).epsilon(1e-5));
-  CHECK(factor(run(g, {left_of(108), left_of(110)}), g, 0) == Approx(h108.f).epsilon(1e-5));
+  CHECK(factor(run(g, {left_part(110), left_part(108)}), g, 0) == Approx(h108.f).epsilon(1e-5));
+  CHECK(factor(run(g, {left_part(108), left_part(110)}), g, 0) == Approx(h108.f).epsilon(1e-5));
 }
 
 TEST_CASE("the rho gate is strict: gamma = n_ovf / n_vis > rho") {
   const auto g = one_gaussian({0.5f, 0.1f, 1.f});
-  const vcar::Mask ovf = left_of(110), inside = left_of(200);
+  const vcar::Mask ovf = left_part(110), inside = left_part(200);
   auto views = [&](int n_ovf, int n_in) {
     std::vector<vcar::Mask> v(static_cast<std::size_t>(n_ovf), ovf);
     v.insert(v.end(), static_cast<std::size_t>(n_in), inside);
@@ -213,16 +213,16 @@ TEST_CASE("f_min clamps a small positive factor") {
   REQUIRE(h.f < 0.5);  // below the f_min chosen here
   vcar::AbrParams p;
   p.f_min = 0.5f;
-  CHECK(factor(run(g, {left_of(106)}, p), g, 0) == Approx(0.5).epsilon(1e-6));
+  CHECK(factor(run(g, {left_part(106)}, p), g, 0) == Approx(0.5).epsilon(1e-6));
   p.f_min = 0.1f;  // default: the raw factor passes
-  CHECK(factor(run(g, {left_of(106)}, p), g, 0) == Approx(h.f).epsilon(1e-5));
+  CHECK(factor(run(g, {left_part(106)}, p), g, 0) == Approx(h.f).epsilon(1e-5));
 }
 
 TEST_CASE("a negative Eq. 13 numerator gives f_min (B.3)") {
   const auto g = one_gaussian({0.5f, 0.1f, 1.f});
   const Hand h = hand(0.5, 101);  // l ~ 0.7 px: (l/3)^2 < eps2d = lambda - w_1
   REQUIRE(h.f < 0.0);
-  const auto r = run(g, {left_of(101)});
+  const auto r = run(g, {left_part(101)});
   CHECK(factor(r, g, 0) == Approx(0.1).epsilon(1e-6));
   CHECK(r.axis_compressed[0] == 0b001);
 }
@@ -230,8 +230,8 @@ TEST_CASE("a negative Eq. 13 numerator gives f_min (B.3)") {
 TEST_CASE("a centre on background is not eligible (B.1)") {
   const auto g = one_gaussian({0.5f, 0.1f, 1.f});
   vcar::BoundaryRefinement abr(g, {0});
-  abr.add_view(camera(), left_of(95));  // centre at u = 100.3 is background
-  abr.add_view(camera(), left_of(95));
+  abr.add_view(camera(), left_part(95));  // centre at u = 100.3 is background
+  abr.add_view(camera(), left_part(95));
   CHECK(abr.n_vis(0) == 0);
   CHECK(abr.n_ovf(0) == 0);
   const auto r = abr.finish();
@@ -241,7 +241,7 @@ TEST_CASE("a centre on background is not eligible (B.1)") {
   vcar::GaussianScene behind = g;
   behind.mean[2][0] = -10.f;
   vcar::BoundaryRefinement abr2(behind, {0});
-  abr2.add_view(camera(), left_of(200));
+  abr2.add_view(camera(), left_part(200));
   CHECK(abr2.n_vis(0) == 0);
 }
 
@@ -258,7 +258,7 @@ TEST_CASE("an endpoint outside the image counts as overflow, traced to the image
 TEST_CASE("an elongated Gaussian inside the mask is not penalised (directional test)") {
   const auto g = one_gaussian({0.5f, 0.1f, 1.f});  // a = 15.1 px, the mask reaches u = 116
   vcar::BoundaryRefinement abr(g, {0});
-  abr.add_view(camera(), left_of(116));
+  abr.add_view(camera(), left_part(116));
   CHECK(abr.n_vis(0) == 1);
   CHECK(abr.n_ovf(0) == 0);
   CHECK(abr.finish().flagged == 0);
@@ -314,7 +314,7 @@ TEST_CASE("reference-code rules on the straddling Gaussian") {
   vcar::AbrParams p;
   p.reference_code_rules = true;
   // Along u = e1 only axis 0 contributes, so its share is all of lambda: f = (l/3) / sqrt(lambda).
-  CHECK(factor(run(g, {left_of(110)}, p), g, 0) == Approx(h.l / 3.0 / std::sqrt(h.lambda)).epsilon(1e-5));
+  CHECK(factor(run(g, {left_part(110)}, p), g, 0) == Approx(h.l / 3.0 / std::sqrt(h.lambda)).epsilon(1e-5));
 }
 
 TEST_CASE("results are bit-identical for any thread count") {
@@ -350,7 +350,7 @@ TEST_CASE("outputs stay aligned with the candidates as given") {
   g.set(1, {-0.3f, 0.1f, 10.f}, small, {1, 0, 0, 0}, 5.f);
   g.set(2, {0.f, 0.f, 10.f}, big, {1, 0, 0, 0}, 5.f);
   vcar::BoundaryRefinement abr(g, {1, 0});
-  abr.add_view(camera(), left_of(110));
+  abr.add_view(camera(), left_part(110));
   CHECK(abr.candidates() == std::vector<vcar::Index>{1, 0});
   CHECK(abr.n_ovf(0) == 0);
   CHECK(abr.n_ovf(1) == 1);

@@ -17,7 +17,7 @@ namespace {
 struct Render {
   ImageF alpha, depth;
 };
-Render square_in_front(float wall = 3.f) {
+Render square_before_wall(float wall = 3.f) {
   Render r{ImageF(20, 20, 1), ImageF(20, 20, 1)};
   for (int y = 0; y < 20; ++y)
     for (int x = 0; x < 20; ++x) {
@@ -35,7 +35,7 @@ std::size_t count(const std::vector<std::uint8_t>& v) {
 }  // namespace
 
 TEST_CASE("Eq. R11a by hand: the near side of a depth step or of an empty pixel") {
-  const Render r = square_in_front();
+  const Render r = square_before_wall();
   const std::vector<std::uint8_t> e = vcar::occlusion_edges(r.alpha, r.depth, 0.05f);
   auto at = [&](int x, int y) { return e[static_cast<std::size_t>(y) * 20 + x]; };
   CHECK(count(e) == 36);  // the square's border ring: 10 x 10 - 8 x 8
@@ -47,7 +47,7 @@ TEST_CASE("Eq. R11a by hand: the near side of a depth step or of an empty pixel"
   CHECK(count(vcar::occlusion_edges(r.alpha, r.depth, 2.5f)) == 0);
   // A pixel with no surface (alpha < 0.5) is infinitely far: its neighbours with a surface are
   // edges; it is none itself.
-  Render hole = square_in_front();
+  Render hole = square_before_wall();
   hole.alpha.data[2 * 20 + 2] = 0.2f;
   const std::vector<std::uint8_t> h = vcar::occlusion_edges(hole.alpha, hole.depth, 0.05f);
   CHECK(count(h) == 36 + 4);
@@ -57,7 +57,7 @@ TEST_CASE("Eq. R11a by hand: the near side of a depth step or of an empty pixel"
 }
 
 TEST_CASE("Eq. R11b by hand: a mask on the edge reads 0, a dilated one its dilation, an eroded one minus") {
-  const Render r = square_in_front();
+  const Render r = square_before_wall();
   // The square itself: every contour pixel is an edge pixel inside the mask.
   CHECK(vcar::overshoot_px(square_mask(20, 20, 5, 5, 15, 15), r.alpha, r.depth, 0.05f) == 0.0);
   // Dilated by 2 (the square [3, 17)^2): of each side's 14 contour pixels, 10 are 2 px from the
@@ -68,7 +68,7 @@ TEST_CASE("Eq. R11b by hand: a mask on the edge reads 0, a dilated one its dilat
   CHECK(vcar::overshoot_px(square_mask(20, 20, 7, 7, 13, 13), r.alpha, r.depth, 0.05f) == -2.0);
   // Nothing to measure: no mask, or a render without an occlusion edge.
   CHECK(vcar::overshoot_px(Mask(20, 20, 1), r.alpha, r.depth, 0.05f) == 0.0);
-  const Render flat = square_in_front(1.f);
+  const Render flat = square_before_wall(1.f);
   CHECK(vcar::overshoot_px(square_mask(20, 20, 3, 3, 17, 17), flat.alpha, flat.depth, 0.05f) == 0.0);
 }
 
@@ -76,7 +76,7 @@ TEST_CASE("Eq. R11b is a median: a nearer neighbour along one side does not move
   // A nearer object [15, 19) x [5, 15) (depth 0.5) touches the square's right side: there the
   // square is the far side and no edge; the neighbour's own border is. The dilated mask's right
   // contour reads 0-1 px (12 pixels), the three other sides still 2 (34) or more (6): median 2.
-  Render r = square_in_front();
+  Render r = square_before_wall();
   for (int y = 5; y < 15; ++y)
     for (int x = 15; x < 19; ++x) r.depth.data[static_cast<std::size_t>(y) * 20 + x] = 0.5f;
   CHECK(vcar::overshoot_px(square_mask(20, 20, 3, 3, 17, 17), r.alpha, r.depth, 0.05f) == 2.0);

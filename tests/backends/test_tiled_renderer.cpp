@@ -6,6 +6,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <numeric>
 #include <random>
 #include <sstream>
@@ -201,6 +202,37 @@ TEST_CASE("subset and log-scale override render only the drawn Gaussians with ne
   q3.subset = nullptr;
   q3.log_scale = nullptr;
   CHECK(max_abs(r.render(q3).alpha.data, ref.alpha) > 1e-2);
+}
+
+TEST_CASE("the stand-ins for infinite opacity logits render as opacity 1 and 0") {
+  const int W = 80, H = 64;
+  const vcar::Camera cam = camera(W, H);
+  vcar::GaussianScene sc = random_scene(300, 11, cam);
+  // Every third Gaussian transparent (as a file's -inf reads), every seventh opaque (+inf).
+  std::vector<Index> kept;
+  for (std::size_t i = 0; i < sc.size(); ++i) {
+    if (i % 3 == 0) { sc.opacity_logit[i] = -std::numeric_limits<float>::infinity(); continue; }
+    if (i % 7 == 0) sc.opacity_logit[i] = std::numeric_limits<float>::infinity();
+    kept.push_back(Index(i));
+  }
+  const vcar::InfiniteOpacities n = sc.settle_infinite_opacities();
+  CHECK(n.transparent == 100);
+  CHECK(n.opaque == 28);  // multiples of 7 below 300 that are not multiples of 3: 43 - 15
+  sc.validate();
+  vcar::RenderRequest q;
+  q.scene = &sc;
+  q.camera = &cam;
+  vcar::cpu::TiledRenderer r;
+  const auto out = r.render(q);
+  const BruteForce ref = brute_force(q);
+  CHECK(max_abs(out.rgb.data, ref.rgb) <= 1e-4);
+  CHECK(max_abs(out.alpha.data, ref.alpha) <= 1e-4);
+  // The transparent ones draw nothing: the same image as the scene without them.
+  vcar::RenderRequest q2 = q;
+  q2.subset = &kept;
+  const auto out2 = r.render(q2);
+  CHECK(max_abs(out2.alpha.data, std::vector<double>(out.alpha.data.begin(), out.alpha.data.end())) == 0.0);
+  CHECK(max_abs(out2.rgb.data, std::vector<double>(out.rgb.data.begin(), out.rgb.data.end())) == 0.0);
 }
 
 TEST_CASE("contribution sums match the brute force") {

@@ -323,3 +323,47 @@ TEST_CASE("other elements are skipped; duplicate properties are rejected") {
   write_bytes(path, header("binary_little_endian", 0, dup));
   require_error([&] { vcar::io::read_ply(path); }, {"duplicate property 'x'"});
 }
+
+TEST_CASE("opacity logits of +-inf read as fully opaque / transparent, counted; other infinities refused") {
+  TempDir tmp;
+  const auto path = tmp / "inf.ply";
+  const float inf = std::numeric_limits<float>::infinity();
+  std::vector<float> opaque = good_row(1), clear = good_row(2), opaque2 = good_row(3);
+  opaque[6] = inf;
+  clear[6] = -inf;
+  opaque2[6] = inf;
+  write_bytes(path, header("binary_little_endian", 4, deg0) + binary_rows({opaque, good_row(4), clear, opaque2}));
+  vcar::InfiniteOpacities infinite;
+  const vcar::GaussianScene g = vcar::io::read_ply(path, &infinite);
+  CHECK(infinite.opaque == 2);
+  CHECK(infinite.transparent == 1);
+  CHECK(infinite.message() == "3 Gaussians had infinite opacity logits: read as fully opaque (2) or transparent (1)");
+  CHECK(g.opacity(0) == 1.f);  // exactly, in float
+  CHECK(g.opacity(2) == 0.f);
+  CHECK(g.opacity(3) == 1.f);
+  CHECK(g.opacity_logit[1] == 0.5f);  // finite logits untouched
+  CHECK(std::isfinite(g.opacity_logit[0]));
+  // Read the same without asking for the count: the same scene.
+  check_same(vcar::io::read_ply(path), g);
+  // ASCII files spell them "inf" / "-inf".
+  write_bytes(path, header("ascii", 2, deg0) + "1 2 3 0 0 0 inf 0 0 0 1 0 0 0\n1 2 3 0 0 0 -inf 0 0 0 1 0 0 0\n");
+  vcar::io::read_ply(path, &infinite);
+  CHECK(infinite.opaque == 1);
+  CHECK(infinite.transparent == 1);
+  // A file without them reports zero and no message.
+  write_bytes(path, header("binary_little_endian", 1, deg0) + binary_rows({good_row(1)}));
+  vcar::io::read_ply(path, &infinite);
+  CHECK(infinite.total() == 0);
+  CHECK(infinite.message().empty());
+  // NaN opacity, infinite positions, scales, rotations and colours stay refused.
+  for (std::size_t col : {0u, 3u, 7u, 10u}) {
+    std::vector<float> bad = good_row(1);
+    bad[col] = inf;
+    write_bytes(path, header("binary_little_endian", 1, deg0) + binary_rows({bad}));
+    require_error([&] { vcar::io::read_ply(path); }, {"inf.ply", "Gaussian 0", "NaN or infinite"});
+  }
+  std::vector<float> nan_opacity = good_row(1);
+  nan_opacity[6] = std::numeric_limits<float>::quiet_NaN();
+  write_bytes(path, header("binary_little_endian", 1, deg0) + binary_rows({nan_opacity}));
+  require_error([&] { vcar::io::read_ply(path); }, {"Gaussian 0", "NaN or infinite"});
+}

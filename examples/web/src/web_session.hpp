@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -73,7 +74,9 @@ public:
       scene_ = io::detail::decode_spz_arrays(h, bytes.data() + 16, -1.f, 1.f, name);
       format_ = io::SceneFormat::spz;
     } else {
-      scene_ = io::read_scene(path, &format_);
+      InfiniteOpacities infinite;
+      scene_ = io::read_scene(path, &format_, &infinite);
+      if (infinite.total()) std::fprintf(stderr, "vcar: warning: %s: %s\n", name.c_str(), infinite.message().c_str());
     }
     std::filesystem::remove(path);
     if (scene_.empty()) throw Error("the scene has no Gaussians", name);

@@ -19,6 +19,23 @@ using Index = std::uint32_t;  // a Gaussian's index into its scene
 // Per-axis log-scales for a set of Gaussians: column d holds log s_d.
 using LogScales = std::array<std::vector<float>, 3>;
 
+// How many opacity logits of +inf (fully opaque) and -inf (fully transparent) a scene had
+// before GaussianScene::settle_infinite_opacities made them finite.
+struct InfiniteOpacities {
+  std::size_t opaque = 0, transparent = 0;
+  std::size_t total() const noexcept { return opaque + transparent; }
+  // "N Gaussians had infinite opacity logits: read as fully opaque/transparent" (empty if none).
+  std::string message() const {
+    if (total() == 0) return {};
+    std::string what = opaque && transparent ? "fully opaque (" + std::to_string(opaque) + ") or transparent (" +
+                                                   std::to_string(transparent) + ")"
+                       : opaque              ? std::string("fully opaque")
+                                             : std::string("fully transparent");
+    return std::to_string(total()) + (total() == 1 ? " Gaussian had an infinite opacity logit" : " Gaussians had infinite opacity logits") +
+           ": read as " + what;
+  }
+};
+
 struct GaussianScene {
   std::array<std::vector<float>, 3> mean;       // mu: x, y, z (world units)
   std::array<std::vector<float>, 3> log_scale;  // log s_d
@@ -93,6 +110,22 @@ struct GaussianScene {
       for (std::size_t e = 0; e < E; ++e) out.extra[k * E + e] = extra[i * E + e];
     }
     return out;
+  }
+
+  // The finite logits that stand for +inf / -inf: in float, sigmoid(100) is exactly 1 and
+  // sigmoid(-100) exactly 0 (exp(100) overflows), so opacities are those the file meant.
+  static constexpr float opaque_logit = 100.f, transparent_logit = -100.f;
+
+  // Opacity logits of +inf / -inf (converters write them for opacity 1 / 0: splat-transform
+  // 2.7.1 does) replaced by opaque_logit / transparent_logit; returns how many of each. NaN
+  // logits and infinities in any other column stay, for validate to refuse.
+  InfiniteOpacities settle_infinite_opacities() {
+    InfiniteOpacities n;
+    for (float& o : opacity_logit) {
+      if (o == INFINITY) { o = opaque_logit; ++n.opaque; }
+      else if (o == -INFINITY) { o = transparent_logit; ++n.transparent; }
+    }
+    return n;
   }
 
   // Throws vcar::Error naming the first bad Gaussian: column sizes that disagree, NaN/Inf in any

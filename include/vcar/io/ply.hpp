@@ -8,8 +8,11 @@
 // layout of GaussianScene::sh). Every other vertex property (normals nx ny nz, custom fields) is
 // kept, as float, in GaussianScene::extra_names / extra and written back: a read -> write round
 // trip loses nothing but the precision of non-float extras. Elements other than `vertex` are
-// skipped (fixed-size ones only, when they come before it). The whole scene is checked
-// (GaussianScene::validate) and sizes are checked against the file size before anything is
+// skipped (fixed-size ones only, when they come before it). Opacity logits of +inf / -inf
+// (opacity 1 / 0, as some converters write them) are read as fully opaque / transparent
+// (GaussianScene::settle_infinite_opacities) and counted in `*infinite` when given. The whole
+// scene is checked (GaussianScene::validate: NaN anywhere, infinite positions, scales,
+// rotations or colours are refused) and sizes are checked against the file size before anything is
 // allocated; bad input throws vcar::Error naming the file (and the byte offset or vertex).
 //
 // Writing follows the Inria writer: `format binary_little_endian 1.0` (or ascii), one `vertex`
@@ -327,7 +330,7 @@ inline void check_writable(const std::filesystem::path& path, const GaussianScen
 }  // namespace detail
 
 // Reads an Inria 3DGS PLY (see the top of this file for what is accepted and kept).
-inline GaussianScene read_ply(const std::filesystem::path& path) {
+inline GaussianScene read_ply(const std::filesystem::path& path, InfiniteOpacities* infinite = nullptr) {
   const std::string where = path.string();
   std::error_code ec;
   const std::uint64_t file_size = std::filesystem::file_size(path, ec);
@@ -468,6 +471,8 @@ inline GaussianScene read_ply(const std::filesystem::path& path) {
         p = tok_end;
       }
   }
+  const InfiniteOpacities settled = scene.settle_infinite_opacities();
+  if (infinite) *infinite = settled;
   scene.validate(where);
   return scene;
 }

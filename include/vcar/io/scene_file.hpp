@@ -63,12 +63,16 @@ inline SceneFormat detect_scene_format(const std::filesystem::path& path) {
               "files have no signature and must be named *.splat", where);
 }
 
-// Reads any of the four formats (docs/formats.md); `format`, when given, receives what was read.
-inline GaussianScene read_scene(const std::filesystem::path& path, SceneFormat* format = nullptr) {
+// Reads any of the four formats (docs/formats.md); `format`, when given, receives what was read,
+// and `infinite` how many opacity logits were +-inf and read as opacity 1 / 0 (only float
+// formats can hold them: Inria PLY; the 8-bit formats never do, and report zero).
+inline GaussianScene read_scene(const std::filesystem::path& path, SceneFormat* format = nullptr,
+                                InfiniteOpacities* infinite = nullptr) {
   const SceneFormat f = detect_scene_format(path);
   if (format) *format = f;
+  if (infinite) *infinite = {};
   switch (f) {
-    case SceneFormat::ply: return read_ply(path);
+    case SceneFormat::ply: return read_ply(path, infinite);
     case SceneFormat::compressed_ply: return read_compressed_ply(path);
     case SceneFormat::spz: return read_spz(path);
     case SceneFormat::splat: return read_splat(path);
