@@ -50,7 +50,7 @@ class UsageError extends Error {} // exit 64
 function log(msg) { process.stdout.write(`isnet: ${msg}\n`); }
 
 function parseArgs(argv) {
-  const opt = { model: 'medium', margin: 0.2, threshold: 0.5, threads: os.availableParallelism(), request: null };
+  const opt = { model: 'medium', margin: 0.2, threshold: 0.5, threads: os.availableParallelism?.() ?? os.cpus().length, request: null };
   const number = (flag, v, lo, hi) => {
     const x = Number(v);
     if (v === undefined || v === '' || !Number.isFinite(x) || x < lo || x > hi)

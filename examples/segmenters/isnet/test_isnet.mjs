@@ -6,12 +6,14 @@
 // VCAR renders the donut (tests/data/donut.ply) from two views (A: from 45 deg above, B: from
 // 15 deg above, another side) with their alpha; the ground-truth mask of a render is its
 // alpha >= 0.5. Frames put two renders side by side (640 x 240, same background), so a box
-// around one donut must give that donut's mask, at its place, and not the other one. Two
-// requests, both through the protocol (docs/cli.md):
-//   boxes:   [A|B] box on A -> A's mask, left;  [B|A] box on A -> A's mask, right;
-//            [A|B] null -> no mask file
+// around one donut must give that donut's mask, at its place, and not the other one. Three
+// requests, through the protocol (docs/cli.md):
+//   boxes:    [A|B] box on A -> A's mask, left;  [A|B] null -> no mask file
 //   no boxes ("box" on frame 0, then whole frames):
-//            [B|A] box on B -> B's mask, left;  [A|B] whole frame -> both donuts
+//             [B|A] box on B -> B's mask, left;  [A|B] whole frame -> both donuts
+//   objects:  a: boxes on [A|B] and [B|A] -> A left, A right (masks/a/); b: asked about frame 1
+//             only, its "box" there -> B left (masks/b/00001.png only); c: a's cut of frame 0
+//             -> the same mask, segmented once (4 masks, 3 inferences)
 // Each mask's IoU with its ground truth must reach MIN_IOU (below). Bad requests (boxes of the
 // wrong length, a missing frame, a frame of the wrong size, bad JSON) must fail with status 2 and
 // a message naming the fault. No mask may be left under a temporary name.
@@ -174,20 +176,46 @@ function check(dir, expected) { // expected: [stem, gt or null (no file)]
     if (v < MIN_IOU) fail(`${file} (${what}): IoU ${v.toFixed(4)} < ${MIN_IOU}`);
   }
 }
-{
-  const f0 = frame('A', 'B', [0]), f1 = frame('B', 'A', [1]), f2 = frame('A', 'B', []);
-  const d = request('boxes', [f0, f1, f2], { box: boxAt('A', 0), boxes: [boxAt('A', 0), boxAt('A', 1), null] });
+function segment(name, frames, prompt) {
+  const d = request(name, frames, prompt);
+  for (const o of prompt.objects ?? []) fs.mkdirSync(path.join(d, 'masks', o.name)); // as vcar does
   const p = run(d);
-  if (p.status !== 0) fail(`boxes request: status ${p.status}: ${p.out}`);
+  if (p.status !== 0) fail(`${name} request: status ${p.status}: ${p.out}`);
   process.stdout.write(p.out);
-  check(d, [['00000', f0.gt, 'box on A, left'], ['00001', f1.gt, 'box on A, right'], ['00002', null, 'null box']]);
+  return { dir: d, out: p.out };
 }
-{
+{ // "boxes": one per frame, null = no mask
+  const f0 = frame('A', 'B', [0]), f1 = frame('A', 'B', []);
+  const { dir } = segment('boxes', [f0, f1], { box: boxAt('A', 0), boxes: [boxAt('A', 0), null] });
+  check(dir, [['00000', f0.gt, 'box on A, left'], ['00001', null, 'null box']]);
+}
+{ // no "boxes": "box" on frame 0, the whole frame elsewhere
   const f0 = frame('B', 'A', [0]), f1 = frame('A', 'B', [0, 1]);
-  const d = request('no_boxes', [f0, f1], { box: boxAt('B', 0) });
-  const p = run(d);
-  if (p.status !== 0) fail(`no_boxes request: status ${p.status}: ${p.out}`);
-  process.stdout.write(p.out);
-  check(d, [['00000', f0.gt, '"box" on B, left'], ['00001', f1.gt, 'whole frame, both']]);
+  const { dir } = segment('no_boxes', [f0, f1], { box: boxAt('B', 0) });
+  check(dir, [['00000', f0.gt, '"box" on B, left'], ['00001', f1.gt, 'whole frame, both']]);
+}
+{ // "objects": a with its boxes on both frames; b asked about frame 1 only, its "box" there;
+  // c the same cut as a's on frame 0 (segmented once: 3 inferences for 4 masks)
+  const f0 = frame('A', 'B', [0]), f1 = frame('B', 'A', [1]), f1b = frame('B', 'A', [0]);
+  const objects = [
+    { name: 'a', frame: 0, frames: [0, 2], points: [], point_labels: [], box: null, boxes: [boxAt('A', 0), boxAt('A', 1)] },
+    { name: 'b', frame: 1, frames: [1, 1], points: [], point_labels: [], box: boxAt('B', 0) },
+    { name: 'c', frame: 0, frames: [0, 1], points: [], point_labels: [], box: null, boxes: [boxAt('A', 0)] },
+  ];
+  const { dir, out } = segment('objects', [f0, f1], { objects });
+  for (const o of objects) {
+    const sub = path.join(dir, 'masks', o.name), want = { a: ['00000', '00001'], b: ['00001'], c: ['00000'] }[o.name];
+    const got = fs.readdirSync(sub).sort(); // exactly these: no other frame, no temporary file
+    if (got.join() !== want.map((s) => `${s}.png`).join()) fail(`${sub} holds [${got}], expected [${want.map((s) => `${s}.png`)}]`);
+  }
+  for (const [o, stem, gt, what] of [['a', '00000', f0.gt, 'object a, box on A, left'], ['a', '00001', f1.gt, 'object a, box on A, right'], ['b', '00001', f1b.gt, 'object b, "box" on B, left']]) {
+    const v = iou(path.join(dir, 'masks', o, `${stem}.png`), gt);
+    results.push(v);
+    console.log(`test_isnet: objects ${o}/${stem} (${what}): IoU ${v.toFixed(4)}`);
+    if (v < MIN_IOU) fail(`objects ${o}/${stem} (${what}): IoU ${v.toFixed(4)} < ${MIN_IOU}`);
+  }
+  if (!fs.readFileSync(path.join(dir, 'masks', 'c', '00000.png')).equals(fs.readFileSync(path.join(dir, 'masks', 'a', '00000.png'))))
+    fail('objects: c/00000.png differs from a/00000.png (same frame, same box)');
+  if (!out.includes('4 masks, 3 inferences')) fail(`objects: expected 4 masks from 3 inferences (identical cuts once), the log says: ${out.trim().split('\n').at(-1)}`);
 }
 console.log(`test_isnet: PASS: ${results.length} masks, lowest IoU ${Math.min(...results).toFixed(4)} >= ${MIN_IOU}`);
