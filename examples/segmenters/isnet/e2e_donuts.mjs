@@ -10,7 +10,12 @@
 //   held out: IoU of the selection's render (alpha > 0.5) with the silhouette, 4 other views.
 // A measurement, not a pass/fail test.
 //
-//   node e2e_donuts.mjs VCAR DONUT.ply WORK_DIR [--no-sss] [--no-box] [--size WxH]
+// --with-boxes: also what prompt.json "boxes" will give (not sent by vcar yet): the coarse
+// request again, with "boxes" = each view's bounding box of the target's silhouette (exact
+// boxes, an upper bound), then `vcar segment --masks` on those masks (no SSS: a folder has no
+// masks of sampled views), scored the same way.
+//
+//   node e2e_donuts.mjs VCAR DONUT.ply WORK_DIR [--no-sss] [--no-box] [--with-boxes] [--size WxH]
 
 import fs from 'node:fs';
 import path from 'node:path';
@@ -21,9 +26,9 @@ const HERE = path.dirname(fileURLToPath(import.meta.url));
 const args = process.argv.slice(2);
 const flag = (f) => { const i = args.indexOf(f); if (i < 0) return false; args.splice(i, 1); return true; };
 const value = (f, d) => { const i = args.indexOf(f); if (i < 0) return d; const v = args[i + 1]; args.splice(i, 2); return v; };
-const noSss = flag('--no-sss'), noBox = flag('--no-box');
+const noSss = flag('--no-sss'), noBox = flag('--no-box'), withBoxes = flag('--with-boxes');
 const [W, H] = value('--size', '480x360').split('x').map(Number);
-if (args.length !== 3) { console.error('usage: node e2e_donuts.mjs VCAR DONUT.ply WORK_DIR [--no-sss] [--no-box] [--size WxH]'); process.exit(64); }
+if (args.length !== 3) { console.error('usage: node e2e_donuts.mjs VCAR DONUT.ply WORK_DIR [--no-sss] [--no-box] [--with-boxes] [--size WxH]'); process.exit(64); }
 const [VCAR, DONUT, WORK] = args;
 const { PNG } = await import('pngjs');
 
@@ -108,42 +113,77 @@ for (const cam of [...train, ...held]) {
 
 // ---- vcar segment ---------------------------------------------------------------------------------
 const out = path.join(WORK, 'out');
+function bbox(m) {
+  let x0 = W, y0 = H, x1 = 0, y1 = 0;
+  m.forEach((v, i) => { if (v) { const x = i % W, y = (i / W) | 0; x0 = Math.min(x0, x); y0 = Math.min(y0, y); x1 = Math.max(x1, x + 1); y1 = Math.max(y1, y + 1); } });
+  return [x0, y0, x1, y1];
+}
 const ref = sil['target/train_0'];
-let x0 = W, y0 = H, x1 = 0, y1 = 0, sx = 0, sy = 0, cnt = 0;
-ref.forEach((v, i) => { if (v) { const x = i % W, y = (i / W) | 0; x0 = Math.min(x0, x); y0 = Math.min(y0, y); x1 = Math.max(x1, x + 1); y1 = Math.max(y1, y + 1); sx += x; sy += y; ++cnt; } });
+let sx = 0, sy = 0, cnt = 0;
+ref.forEach((v, i) => { if (v) { sx += i % W; sy += (i / W) | 0; ++cnt; } });
 let px = Math.round(sx / cnt), py = Math.round(sy / cnt);
 if (!ref[py * W + px]) { const i = ref.findIndex((v, k) => v && Math.abs((k % W) - px) + Math.abs(((k / W) | 0) - py) < 40); px = i % W; py = (i / W) | 0; } // the centroid falls in the hole
 const seg = ['segment', '--scene', scene, '--cameras', trainJson, '--prompt-view', 'train_0', '--points', `${px},${py}`,
   '--segmenter-cmd', `node ${path.join(HERE, 'isnet.mjs')}`, '--keep-requests', '--out', out];
-if (!noBox) seg.push('--box', [x0, y0, x1, y1].join(','));
+if (!noBox) seg.push('--box', bbox(ref).join(','));
 if (noSss) seg.push('--set', 'enable_sss=false');
 console.log(`vcar ${seg.join(' ')}`);
 const s = vcar(seg);
 process.stdout.write(s.out);
 
-// 2D: each round's masks of the training views.
-const ious = [];
-for (const req of fs.readdirSync(path.join(out, 'requests')).sort()) {
-  const cams = JSON.parse(fs.readFileSync(path.join(out, 'requests', req, 'cameras.json'), 'utf8'));
-  const log = fs.readFileSync(path.join(out, 'requests', req, 'segmenter.log'), 'utf8').trim().split('\n').at(-1);
-  console.log(`${req}: ${cams.length} frames; ${log}`);
-  if (req !== fs.readdirSync(path.join(out, 'requests')).sort()[0]) continue; // the coarse round: the training views
+const mean = (v) => v.reduce((p, q) => p + q, 0) / v.length;
+// 2D: masks of the training views (`cams`: a request's cameras.json) against the target's silhouette.
+function score2d(cams, maskDir) {
+  const ious = [];
   for (const cam of cams) {
-    const mFile = path.join(out, 'requests', req, 'masks', `${cam.img_name}.png`);
+    const mFile = path.join(maskDir, `${cam.img_name}.png`);
     if (!fs.existsSync(mFile)) { console.log(`  2D ${cam.view}: no mask`); continue; }
-    ious.push(iou(readMask(mFile), sil[`target/${cam.view}`]));
-    const both = iou(readMask(mFile), sil[`target/${cam.view}`].map((v, i) => v || sil[`other/${cam.view}`][i]));
+    const m = readMask(mFile);
+    ious.push(iou(m, sil[`target/${cam.view}`]));
+    const both = iou(m, sil[`target/${cam.view}`].map((v, i) => v || sil[`other/${cam.view}`][i]));
     console.log(`  2D ${cam.view}: IoU ${ious.at(-1).toFixed(3)} with the target (${both.toFixed(3)} with both donuts)`);
   }
+  console.log(`2D mean IoU (${ious.length} training views): ${mean(ious).toFixed(3)}`);
 }
-// 3D and held out.
-const sel = JSON.parse(fs.readFileSync(path.join(out, 'selection.json'), 'utf8')).indices;
-const tp = sel.filter((i) => i < n).length;
-const heldDir = path.join(WORK, 'held_selection');
-vcar(['-q', 'render', '--scene', scene, '--cameras', heldJson, '--all-views', '--selection', path.join(out, 'selection.json'), '--out', heldDir, '--alpha', `${heldDir}_alpha`]);
-const heldIou = held.map((cam) => iou(readMask(path.join(`${heldDir}_alpha`, `${cam.img_name}.png`)), sil[`target/${cam.img_name}`]));
-const rep = JSON.parse(fs.readFileSync(path.join(out, 'report.json'), 'utf8'));
-const mean = (v) => v.reduce((p, q) => p + q, 0) / v.length;
-console.log(`2D mean IoU (coarse round, ${ious.length} training views): ${mean(ious).toFixed(3)}`);
-console.log(`3D: ${sel.length} selected, precision ${(tp / Math.max(1, sel.length)).toFixed(3)}, recall ${(tp / n).toFixed(3)} (target ${n} of ${2 * n} Gaussians); ` +
-  `held-out mIoU ${mean(heldIou).toFixed(3)} (${heldIou.map((v) => v.toFixed(3)).join(', ')}); SSS ${rep.sss_triggered}, ${rep.sampled_views} sampled views; segment ${s.seconds.toFixed(0)} s`);
+// 3D (selected Gaussians) and held out (the selection's render against the silhouettes).
+function score3d(outDir, label, seconds) {
+  const sel = JSON.parse(fs.readFileSync(path.join(outDir, 'selection.json'), 'utf8')).indices;
+  const tp = sel.filter((i) => i < n).length;
+  const heldDir = path.join(outDir, 'held_selection');
+  vcar(['-q', 'render', '--scene', scene, '--cameras', heldJson, '--all-views', '--selection', path.join(outDir, 'selection.json'), '--out', heldDir, '--alpha', `${heldDir}_alpha`]);
+  const heldIou = held.map((cam) => iou(readMask(path.join(`${heldDir}_alpha`, `${cam.img_name}.png`)), sil[`target/${cam.img_name}`]));
+  const rep = JSON.parse(fs.readFileSync(path.join(outDir, 'report.json'), 'utf8'));
+  console.log(`3D (${label}): ${sel.length} selected, precision ${(tp / Math.max(1, sel.length)).toFixed(3)}, recall ${(tp / n).toFixed(3)} (target ${n} of ${2 * n} Gaussians); ` +
+    `held-out mIoU ${mean(heldIou).toFixed(3)} (${heldIou.map((v) => v.toFixed(3)).join(', ')}); SSS ${rep.sss_triggered}, ${rep.sampled_views} sampled views; segment ${seconds.toFixed(0)} s`);
+}
+const reqs = fs.readdirSync(path.join(out, 'requests')).sort();
+for (const req of reqs) {
+  const log = fs.readFileSync(path.join(out, 'requests', req, 'segmenter.log'), 'utf8').trim().split('\n').at(-1);
+  console.log(`${req}: ${JSON.parse(fs.readFileSync(path.join(out, 'requests', req, 'cameras.json'), 'utf8')).length} frames; ${log}`);
+}
+const coarse = path.join(out, 'requests', reqs[0]); // the coarse round: the training views
+const coarseCams = JSON.parse(fs.readFileSync(path.join(coarse, 'cameras.json'), 'utf8'));
+console.log('coarse round, prompt as vcar sends it today:');
+score2d(coarseCams, path.join(coarse, 'masks'));
+score3d(out, 'vcar segment --segmenter-cmd', s.seconds);
+
+if (withBoxes) {
+  const bdir = path.join(WORK, 'boxes_request');
+  fs.cpSync(path.join(coarse, 'frames'), path.join(bdir, 'frames'), { recursive: true });
+  fs.copyFileSync(path.join(coarse, 'cameras.json'), path.join(bdir, 'cameras.json'));
+  fs.mkdirSync(path.join(bdir, 'masks'));
+  const prompt = JSON.parse(fs.readFileSync(path.join(coarse, 'prompt.json'), 'utf8'));
+  prompt.boxes = coarseCams.map((cam) => bbox(sil[`target/${cam.view}`]));
+  fs.writeFileSync(path.join(bdir, 'prompt.json'), JSON.stringify(prompt));
+  const p = spawnSync(process.execPath, [path.join(HERE, 'isnet.mjs'), bdir], { encoding: 'utf8' });
+  if (p.status !== 0) { console.error(`isnet.mjs on ${bdir}: status ${p.status}\n${p.stdout}${p.stderr}`); process.exit(1); }
+  console.log(`with "boxes" (each view's exact target box): ${p.stdout.trim().split('\n').at(-1)}`);
+  score2d(coarseCams, path.join(bdir, 'masks'));
+  const mdir = path.join(WORK, 'boxes_masks');
+  fs.mkdirSync(mdir);
+  for (const cam of coarseCams) fs.copyFileSync(path.join(bdir, 'masks', `${cam.img_name}.png`), path.join(mdir, `${cam.view}.png`));
+  const outB = path.join(WORK, 'out_boxes');
+  const sb = vcar(['segment', '--scene', scene, '--cameras', trainJson, '--prompt-view', 'train_0', '--masks', mdir, '--set', 'enable_sss=false', '--out', outB]);
+  process.stdout.write(sb.out);
+  score3d(outB, 'vcar segment --masks of the boxed request, no SSS', sb.seconds);
+}

