@@ -1,0 +1,18 @@
+# The ISNet segmenter's test (test_isnet.mjs): renders of tests/data/donut.ply made by the
+# `vcar` program, segmented through the external segmenter protocol, IoU against their alpha.
+# Include where the vcar_cli target exists and tests are on, e.g. at the end of the
+# `if(VCAR_BUILD_TESTS)` block of examples/vcar_cli/CMakeLists.txt:
+#   include(${PROJECT_SOURCE_DIR}/examples/segmenters/isnet/tests.cmake)
+# CTest reports it skipped (exit 77), never passed, without node or without the packages
+# (examples/segmenters/isnet/install.sh). About a minute on 2 cores (6 ISNet inferences using
+# every core: RUN_SERIAL).
+find_program(VCAR_NODE_EXECUTABLE node)
+set(_isnet_dir ${PROJECT_SOURCE_DIR}/examples/segmenters/isnet)
+if(VCAR_NODE_EXECUTABLE)
+  add_test(NAME segmenters/isnet
+    COMMAND ${VCAR_NODE_EXECUTABLE} ${_isnet_dir}/test_isnet.mjs $<TARGET_FILE:vcar_cli>
+            ${PROJECT_SOURCE_DIR}/tests/data/donut.ply ${CMAKE_CURRENT_BINARY_DIR}/isnet_test)
+else()
+  add_test(NAME segmenters/isnet COMMAND /bin/sh -c "echo 'test_isnet: SKIP: node not found'; exit 77")
+endif()
+set_tests_properties(segmenters/isnet PROPERTIES SKIP_RETURN_CODE 77 TIMEOUT 900 RUN_SERIAL TRUE LABELS isnet)
