@@ -43,7 +43,9 @@ struct EvalOptions {
 int run_eval(const EvalOptions& o, const GlobalOptions& g);
 
 struct SynthOptions {
-  std::string rig = "forward", out;
+  std::string rig, out;  // rig "": forward, or the stage file's
+  std::string stage;     // a stage file (synth/stage_json.hpp): real objects instead of primitives
+  std::string target;    // with --stage: the target object's name (default: the stage file's)
   std::uint64_t seed = 1;
   std::size_t gaussians = 20000;
   int views = 0;         // 0: the rig's default

@@ -109,11 +109,14 @@ int main(int argc, char** argv) {
   // ---- synth -----------------------------------------------------------------------------
   SynthOptions synth;
   auto* c_synth = app.add_subcommand("synth", "Write a synthetic dataset (scene, cameras, images, GT masks, prompt)");
-  c_synth->add_option("--rig", synth.rig, "Camera rig")
-      ->check(CLI::IsMember({"forward", "360", "sparse", "hemisphere"}))->capture_default_str();
+  c_synth->add_option("--rig", synth.rig, "Camera rig (default: forward, or the stage file's; orbit = 360)")
+      ->check(CLI::IsMember({"forward", "360", "orbit", "sparse", "hemisphere"}));
   c_synth->add_option("--seed", synth.seed, "World seed")->capture_default_str();
-  c_synth->add_option("--gaussians", synth.gaussians, "Number of Gaussians")->capture_default_str()
+  auto* o_gaussians = c_synth->add_option("--gaussians", synth.gaussians, "Number of Gaussians")->capture_default_str()
       ->check(CLI::Range(std::size_t{100}, std::size_t{100000000}));
+  auto* o_stage = c_synth->add_option("--stage", synth.stage, "Stage file (JSON): trained objects on a floor, exact labels");
+  o_stage->excludes(o_gaussians);
+  c_synth->add_option("--target", synth.target, "With --stage: the target object's name")->needs(o_stage);
   c_synth->add_option("--views", synth.views, "Training views (0 = the rig's default)")->check(whole_number_at_least(0));
   c_synth->add_option("--width", synth.width, "Image width (0 = default)")->check(whole_number_at_least(0));
   c_synth->add_option("--height", synth.height, "Image height (0 = default)")->check(whole_number_at_least(0));

@@ -9,8 +9,11 @@
 #include "vcar/synth/mask_ops.hpp"
 #include "vcar/synth/oracle_segmenter.hpp"
 #include "vcar/synth/prompt.hpp"
+#include "vcar/synth/object_prompts.hpp"
 #include "vcar/synth/world_json.hpp"
 #include "vcar/synth/dataset.hpp"
+#include "vcar/synth/stage.hpp"
+#include "vcar/synth/stage_json.hpp"
 
 #include "vcar/eval/mask_metrics.hpp"
 #include "vcar/eval/boundary_metrics.hpp"

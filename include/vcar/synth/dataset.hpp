@@ -9,7 +9,12 @@
 //   masks/<name>.png            visible ground truth of the target in the training views
 //   prompt.json                 {"reference_view": name, "reference_index": k,
 //                                "points": [[u, v], ...] (positive, deep inside the visible
-//                                mask of the reference view), "labels": [1, ...], "target_id"}
+//                                mask of the reference view), "labels": [1, ...], "target_id",
+//                                "box": [x0, y0, x1, y1] (around that visible mask)}; with
+//                                ExportOptions::objects also "objects": [{"name", "object_id",
+//                                "reference_view", "points", "labels", "box"}, ...]
+//   prompts.json                with ExportOptions::objects: the objects' prompts in the format
+//                                of `vcar segment --prompts` (those some training view shows)
 //   gt/eval_cameras.json        the held-out evaluation cameras (Inria layout)
 //   gt/eval_images/<name>.png   renders of the evaluation views
 //   gt/silhouettes/<name>.png   the target alone (evaluation and training views)
@@ -37,6 +42,7 @@
 #include "vcar/io/ply.hpp"
 #include "vcar/io/transforms_json.hpp"
 #include "vcar/synth/ground_truth.hpp"
+#include "vcar/synth/object_prompts.hpp"
 #include "vcar/synth/prompt.hpp"
 #include "vcar/synth/rigs.hpp"
 #include "vcar/synth/world.hpp"
@@ -48,6 +54,9 @@ struct ExportOptions {
   bool render_images = true;                           // images/ and gt/eval_images/
   Eigen::Vector3f background = Eigen::Vector3f::Zero();
   int n_prompt_points = 3;
+  // Objects to prompt besides the target (synth/object_prompts.hpp), by name: prompt.json gains
+  // "objects", prompts.json is written, gt/scene.json names them. Empty: the target only.
+  std::vector<NamedObject> objects;
 };
 
 namespace detail {
@@ -58,9 +67,10 @@ inline void make_dir(const std::filesystem::path& p) {
 }
 }  // namespace detail
 
+// Returns the prompts of ExportOptions::objects (empty without them), to report the hidden ones.
 template <Renderer R>
-void export_dataset(const std::filesystem::path& dir, const World& w, const Rig& rig, R& renderer,
-                    const ExportOptions& opt = {}) {
+std::vector<PromptedObject> export_dataset(const std::filesystem::path& dir, const World& w, const Rig& rig,
+                                           R& renderer, const ExportOptions& opt = {}) {
   static_assert(std::endian::native == std::endian::little, "gaussian_ids.bin is written little-endian");
   if (w.object_id.size() != w.scene.size()) throw Error("object_id and scene sizes differ", "world");
   if (rig.reference >= rig.train.size()) throw Error("reference view out of range", "rig");
@@ -105,10 +115,38 @@ void export_dataset(const std::filesystem::path& dir, const World& w, const Rig&
   for (const auto& p : prompt.points) pj["points"].push_back({static_cast<double>(p.x()), static_cast<double>(p.y())});
   pj["labels"] = prompt.point_labels;
   pj["target_id"] = w.target_id;
+  const Eigen::Vector4f box = mask_box(reference_visible);
+  pj["box"] = {box[0], box[1], box[2], box[3]};
+  const std::vector<PromptedObject> objects = prompt_objects(w, rig, renderer, opt.objects, opt.n_prompt_points);
+  if (!objects.empty()) {
+    nlohmann::json all = nlohmann::json::array(), prompts = nlohmann::json::array();
+    for (const PromptedObject& o : objects) {
+      nlohmann::json e{{"name", o.name}, {"object_id", o.object_id}, {"reference_view", nullptr},
+                       {"points", nlohmann::json::array()}, {"labels", nlohmann::json::array()}, {"box", nullptr}};
+      if (o.visible) {
+        const Eigen::Vector4f& b = *o.prompt.box;
+        e["reference_view"] = rig.train[o.prompt.reference_view].name;
+        for (const auto& p : o.prompt.points) e["points"].push_back({static_cast<double>(p.x()), static_cast<double>(p.y())});
+        e["labels"] = o.prompt.point_labels;
+        e["box"] = {b[0], b[1], b[2], b[3]};
+        prompts.push_back({{"name", o.name}, {"reference_view", e["reference_view"]}, {"points", e["points"]},
+                           {"point_labels", e["labels"]}, {"box", e["box"]}, {"object_id", o.object_id}});
+      }
+      all.push_back(std::move(e));
+    }
+    pj["objects"] = std::move(all);
+    std::error_code ec;
+    if (!prompts.empty()) io::write_json_file(dir / "prompts.json", prompts);
+    else std::filesystem::remove(dir / "prompts.json", ec);  // none visible: no stale file of an earlier run
+  }
   io::write_json_file(dir / "prompt.json", pj);
 
   nlohmann::json sj = world_to_json(w);
   sj["rig"] = rig.kind;
+  if (!opt.objects.empty()) {
+    sj["objects"] = nlohmann::json::array();
+    for (const NamedObject& o : opt.objects) sj["objects"].push_back({{"name", o.name}, {"object_id", o.object_id}});
+  }
   io::write_json_file(dir / "gt" / "scene.json", sj);
   io::atomic_write(dir / "gt" / "gaussian_ids.bin", [&](std::ostream& out) {
     for (int id : w.object_id) {
@@ -116,6 +154,7 @@ void export_dataset(const std::filesystem::path& dir, const World& w, const Rig&
       out.write(reinterpret_cast<const char*>(&v), sizeof v);
     }
   });
+  return objects;
 }
 
 // The world of an exported dataset: gt/scene.json + scene.ply + gt/gaussian_ids.bin.

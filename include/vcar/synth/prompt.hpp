@@ -52,4 +52,18 @@ inline Prompt prompt_points(const Mask& visible, std::size_t reference_view, int
   return p;
 }
 
+// The box around a mask's foreground, [x0, y0, x1, y1] in pixel edges (the pixels j0..j1 span
+// [j0, j1 + 1)): what a user would drag around the visible object. Throws when the mask is empty.
+inline Eigen::Vector4f mask_box(const Mask& m, const std::string& where = "mask") {
+  int x0 = m.width, y0 = m.height, x1 = -1, y1 = -1;
+  for (int i = 0; i < m.height; ++i)
+    for (int j = 0; j < m.width; ++j)
+      if (m.data[static_cast<std::size_t>(i) * m.width + j]) {
+        x0 = std::min(x0, j); x1 = std::max(x1, j);
+        y0 = std::min(y0, i); y1 = std::max(y1, i);
+      }
+  if (x1 < 0) throw Error("the mask is empty: no box", where);
+  return {static_cast<float>(x0), static_cast<float>(y0), static_cast<float>(x1 + 1), static_cast<float>(y1 + 1)};
+}
+
 }  // namespace vcar::synth

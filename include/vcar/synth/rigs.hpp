@@ -36,7 +36,8 @@ struct RigParams {
   Intrinsics intrinsics = make_intrinsics(320, 240);  // tests; demos use e.g. 960 x 720
   int n_train = 0;            // 0: the rig's default (forward 20, orbit 40, sparse 6, hemisphere 24)
   int n_eval = 0;             // 0: the rig's default (forward 5, others 8)
-  float distance = 0.f;       // camera to target centre; 0: the target fills ~half the image height
+  float distance = 0.f;       // camera to target centre; 0: from `fill`
+  float fill = 0.5f;          // with distance 0: the target's bounding sphere spans this share of the image height
   float elevation_deg = 25.f; // above the table plane (orbit, sparse, forward)
   std::uint64_t seed = 1;     // jitter of positions
 };
@@ -52,8 +53,9 @@ inline std::string view_name(const char* prefix, int k) {
 
 inline float rig_distance(const World& w, const RigParams& p) {
   if (p.distance > 0.f) return p.distance;
+  if (!(p.fill > 0.f)) throw Error("fill must be > 0", "RigParams.fill");
   const float r = w.bounds(w.target_id).second;
-  return p.intrinsics.fy * r / (0.25f * static_cast<float>(p.intrinsics.height));
+  return p.intrinsics.fy * r / (0.5f * p.fill * static_cast<float>(p.intrinsics.height));
 }
 
 // Unit direction from the target towards a camera at azimuth a (0 = the -y "front") and

@@ -22,6 +22,20 @@ namespace vcar::synth {
 
 // Gaussians copied from a trained scene (e.g. tests/data/donut.ply) and placed in the world.
 // Their ground truth needs a Renderer (alpha of their rendering > 0.5), see ground_truth.hpp.
+// Robust extents of inserted objects use the quantiles q and 1 - q of their means along an axis:
+// one Gaussian in a thousand may stray (a floater of the capture) without changing an object's
+// box, its size on a stage or its contact with the floor (synth/stage.hpp).
+inline constexpr double robust_extent_quantile = 0.001;
+
+namespace detail {
+// The value of rank floor(q (n - 1)) among v (v is reordered; not empty).
+inline float quantile(std::vector<float>& v, double q) {
+  const auto k = static_cast<std::ptrdiff_t>(q * static_cast<double>(v.size() - 1));
+  std::nth_element(v.begin(), v.begin() + k, v.end());
+  return v[static_cast<std::size_t>(k)];
+}
+}  // namespace detail
+
 struct InsertedObject {
   int object_id = 0;
   std::size_t begin = 0, count = 0;  // Gaussians [begin, begin + count) of World::scene
@@ -44,36 +58,45 @@ struct World {
       if (object_id[i] == id) out.push_back(static_cast<Index>(i));
     return out;
   }
-  // Bounding sphere (centre, radius) of object `id`: its primitives and inserted Gaussians.
-  std::pair<Eigen::Vector3f, float> bounds(int id) const {
-    Eigen::Vector3f lo = Eigen::Vector3f::Constant(INFINITY), hi = -lo;
-    for (const auto& q : primitives)
-      if (q.object_id == id) {
-        const float r = bounding_radius(q);
-        lo = lo.cwiseMin((q.t.array() - r).matrix());
-        hi = hi.cwiseMax((q.t.array() + r).matrix());
-      }
-    for (const auto& o : inserted)
-      if (o.object_id == id)
-        for (std::size_t i = o.begin; i < o.begin + o.count; ++i) {
-          lo = lo.cwiseMin(scene.mu(i));
-          hi = hi.cwiseMax(scene.mu(i));
-        }
-    if (!(lo.x() <= hi.x())) throw Error("no object with id " + std::to_string(id), "world");
-    const Eigen::Vector3f c = 0.5f * (lo + hi);
-    float r = 0.f;
-    for (const auto& q : primitives)
-      if (q.object_id == id) r = std::max(r, (q.t - c).norm() + bounding_radius(q));
-    for (const auto& o : inserted)
-      if (o.object_id == id)
-        for (std::size_t i = o.begin; i < o.begin + o.count; ++i) r = std::max(r, (scene.mu(i) - c).norm());
-    return {c, r};
-  }
+  // Bounding sphere (centre, radius) of object `id`: its primitives and the robust box of its
+  // inserted Gaussians (robust_extent_quantile), so a trained object's stray floaters do not
+  // push the rigs' cameras away.
+  std::pair<Eigen::Vector3f, float> bounds(int id) const;
   bool has_inserted(int id) const {
     for (const auto& o : inserted) if (o.object_id == id) return true;
     return false;
   }
 };
+
+inline std::pair<Eigen::Vector3f, float> World::bounds(int id) const {
+  Eigen::Vector3f lo = Eigen::Vector3f::Constant(INFINITY), hi = -lo;
+  for (const auto& q : primitives)
+    if (q.object_id == id) {
+      const float r = bounding_radius(q);
+      lo = lo.cwiseMin((q.t.array() - r).matrix());
+      hi = hi.cwiseMax((q.t.array() + r).matrix());
+    }
+  std::vector<float> v[3];
+  for (const auto& o : inserted)
+    if (o.object_id == id)
+      for (std::size_t i = o.begin; i < o.begin + o.count; ++i)
+        for (int d = 0; d < 3; ++d) v[d].push_back(scene.mean[d][i]);
+  Eigen::Vector3f ilo = Eigen::Vector3f::Constant(INFINITY), ihi = -ilo;  // the inserted Gaussians' robust box
+  if (!v[0].empty())
+    for (int d = 0; d < 3; ++d) {
+      ilo[d] = detail::quantile(v[d], robust_extent_quantile);
+      ihi[d] = detail::quantile(v[d], 1.0 - robust_extent_quantile);
+    }
+  lo = lo.cwiseMin(ilo);
+  hi = hi.cwiseMax(ihi);
+  if (!(lo.x() <= hi.x())) throw Error("no object with id " + std::to_string(id), "world");
+  const Eigen::Vector3f c = 0.5f * (lo + hi);
+  float r = 0.f;
+  for (const auto& q : primitives)
+    if (q.object_id == id) r = std::max(r, (q.t - c).norm() + bounding_radius(q));
+  if (!v[0].empty()) r = std::max(r, (ilo - c).cwiseAbs().cwiseMax((ihi - c).cwiseAbs()).norm());
+  return {c, r};
+}
 
 struct WorldParams {
   std::uint64_t seed = 1;
@@ -139,6 +162,24 @@ inline Eigen::Vector3f random_tangent(const Eigen::Vector3f& n, Rng& rng) {
   const Eigen::Vector3f e1 = n.unitOrthogonal(), e2 = n.cross(e1);
   const float a = 2.f * std::numbers::pi_v<float> * rng.uniform();
   return std::cos(a) * e1 + std::sin(a) * e2;
+}
+
+// Writes Gaussian i as a flat textured disc on primitive P[k] (a sample uniform by area, redrawn
+// while buried in another primitive): in-plane sigmas disc_scale h (+-25%), normal sigma
+// normal_scale h, where h is the local spacing of the samples; opaque, its colour the texture's
+// with a grain. Shared by the world's surfaces and the stage's floor (synth/stage.hpp).
+inline void surface_disc(GaussianScene& g, std::size_t i, const std::vector<Primitive>& P, std::size_t k, float h,
+                         float disc_scale, float normal_scale, Rng& rng) {
+  SurfaceSample smp = sample_surface(P[k], rng);
+  for (int attempt = 0; attempt < 64 && buried(P, k, smp.p); ++attempt) smp = sample_surface(P[k], rng);
+  // Random draws are sequenced explicitly (argument order is unspecified in C++; see make_layout).
+  const float s1 = rng.uniform(0.75f, 1.25f);
+  const float s0 = rng.uniform(0.75f, 1.25f);
+  const Eigen::Vector3f s(disc_scale * h * s0, disc_scale * h * s1, normal_scale * h);
+  const Eigen::Vector3f jitter = Eigen::Vector3f::Constant(rng.uniform(-0.03f, 0.03f));
+  const float opacity = rng.uniform(0.92f, 0.99f);
+  const Eigen::Vector3f tangent = random_tangent(smp.n, rng);
+  put_gaussian(g, i, smp.p, smp.n, tangent, s, opacity, surface_colour(P[k], smp.local) + jitter);
 }
 
 // The layout: table (0), target (1), neighbour box touching it (2), a rod leaning on the
@@ -289,16 +330,8 @@ inline World generate_world(const WorldParams& wp = {}) {
     const std::size_t i = static_cast<std::size_t>(ii);
     const std::size_t k = static_cast<std::size_t>(std::upper_bound(offset.begin(), offset.end(), i) - offset.begin()) - 1;
     Rng rng(wp.seed, 1, i);
-    SurfaceSample smp = sample_surface(P[k], rng);
-    for (int attempt = 0; attempt < 64 && detail::buried(P, k, smp.p); ++attempt) smp = sample_surface(P[k], rng);
     const float h = std::sqrt(area(P[k]) / static_cast<float>(count[k]));
-    const float s1 = rng.uniform(0.75f, 1.25f);  // drawn before s0 (see F above)
-    const float s0 = rng.uniform(0.75f, 1.25f);
-    const Eigen::Vector3f s(wp.disc_scale * h * s0, wp.disc_scale * h * s1, wp.normal_scale * h);
-    const Eigen::Vector3f jitter = Eigen::Vector3f::Constant(rng.uniform(-0.03f, 0.03f));
-    const float opacity = rng.uniform(0.92f, 0.99f);  // drawn before the tangent (see F above)
-    const Eigen::Vector3f tangent = detail::random_tangent(smp.n, rng);
-    detail::put_gaussian(g, i, smp.p, smp.n, tangent, s, opacity, surface_colour(P[k], smp.local) + jitter);
+    detail::surface_disc(g, i, P, k, h, wp.disc_scale, wp.normal_scale, rng);
     w.object_id[i] = P[k].object_id;
   });
 
