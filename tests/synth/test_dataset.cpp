@@ -10,16 +10,13 @@
 #include "vcar/io/ply.hpp"
 #include "vcar/synth/dataset.hpp"
 #include "vcar/synth/oracle_segmenter.hpp"
+#include "synth_test_util.hpp"
 
 using namespace vcar::synth;
 namespace fs = std::filesystem;
 
 namespace {
-fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("vcar_synth_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  return d;
-}
+using vcar_test::fresh_dir;
 RigParams small_rig() {
   RigParams p;
   p.intrinsics = make_intrinsics(96, 72);

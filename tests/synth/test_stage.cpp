@@ -15,18 +15,14 @@
 #include "vcar/synth/dataset.hpp"
 #include "vcar/synth/stage.hpp"
 #include "vcar/synth/stage_json.hpp"
+#include "synth_test_util.hpp"
 
 using namespace vcar::synth;
 namespace fs = std::filesystem;
 
 namespace {
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("vcar_stage_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+using vcar_test::fresh_dir;
 
 // A box of Gaussians on a grid (exact extents) whose long side, `length`, runs along the object's
 // `up` axis from 0 to `length` (so its lowest point is the origin), 0.2 x 0.6 across (the 0.6
@@ -83,9 +79,7 @@ Box box_of(const World& w, int id) {
   return b;
 }
 
-bool same_bytes(const std::vector<float>& a, const std::vector<float>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
-}
+using vcar_test::same_bytes;
 bool same_range(const vcar::GaussianScene& a, const vcar::GaussianScene& b, std::size_t begin, std::size_t end,
                 bool means) {
   auto part = [&](const std::vector<float>& v, std::size_t per) {

@@ -5,13 +5,12 @@
 
 #include "vcar/core/parallel.hpp"
 #include "vcar/synth/world.hpp"
+#include "synth_test_util.hpp"
 
 using namespace vcar::synth;
 
 namespace {
-bool same_bytes(const std::vector<float>& a, const std::vector<float>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
-}
+using vcar_test::same_bytes;
 bool same_scene(const World& a, const World& b) {
   bool ok = a.object_id == b.object_id && same_bytes(a.scene.opacity_logit, b.scene.opacity_logit) &&
             same_bytes(a.scene.sh, b.scene.sh);
