@@ -85,6 +85,12 @@ TEST_CASE("grabcut: a disc in its box; seeds; degenerate boxes give no mask") {
   CHECK((m->width == 120 && m->height == 90 && m->channels == 1));
   CHECK(iou(*m, one.masks[0]) > 0.95);  // measured 0.99+
   CHECK(vcar::opencv::grabcut(one.image, {30.f, 15.f, 90.f, 75.f})->data == m->data);  // deterministic
+  // The disc covers pi 20^2 / 60^2 = 0.35 of its box: a mask under min_foreground is no mask.
+  vcar::opencv::GrabCutParams gp;
+  gp.min_foreground = 0.3f;
+  CHECK(vcar::opencv::grabcut(one.image, {30.f, 15.f, 90.f, 75.f}, gp));
+  gp.min_foreground = 0.4f;
+  CHECK_FALSE(vcar::opencv::grabcut(one.image, {30.f, 15.f, 90.f, 75.f}, gp));
 
   // Two discs in one box: both are foreground. Seeds are hard labels: a negative point's disc is
   // background, a positive point's foreground, even where GrabCut would say otherwise.

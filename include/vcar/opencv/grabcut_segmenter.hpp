@@ -8,15 +8,19 @@
 // it in each frame it is asked about (the training views, and the sampled views of the fine
 // round, which render only G_coarse: the same rule serves both rounds). Per frame k:
 //  - the box: the prompt's own box on frame 0 (the reference view) when the prompt has one;
-//    elsewhere LiftedPrompt::box_for(camera, margin, outliers). No box (the object behind the
-//    camera or out of view), a box under min_box_px on a side, or one that leaves less than
-//    min_background of the frame outside it (nothing to learn the background from): "no mask",
-//    sink(k, nullptr), and the frame is never rendered;
+//    elsewhere LiftedPrompt::box_for(camera, margin, outliers), with point_margin instead of
+//    margin when the prompt has no box (a point prompt lifts part of the object). No box (the
+//    object behind the camera or out of view), a box under min_box_px on a side, or one that
+//    leaves less than min_background of the frame outside it (nothing to learn the background
+//    from): "no mask", sink(k, nullptr), and the frame is never rendered;
 //  - the image: frames.image(k) (8-bit RGB), as a BGR cv::Mat;
 //  - cv::grabCut with GC_INIT_WITH_RECT, `iterations` rounds; on frame 0, prompt points seed
 //    discs of seed_radius * (image diagonal): positive GC_FGD, negative GC_BGD (the box's
 //    initial labels otherwise: GC_BGD outside, GC_PR_FGD inside; GC_INIT_WITH_MASK then);
-//  - the mask: 255 where GrabCut says GC_FGD or GC_PR_FGD (the labels with bit 0 set), to the sink.
+//  - the mask: 255 where GrabCut says GC_FGD or GC_PR_FGD (the labels with bit 0 set), to the
+//    sink; "no mask" when that is under min_foreground of the box's area (GrabCut found nothing
+//    to separate: the box lies inside the object, or the object is hidden: no evidence, rather
+//    than an empty mask that would vote against the object).
 // Deterministic: OpenCV's random generator (its k-means initialisation of the GMMs) is reset to
 // `seed` before each frame. Cost: about one GrabCut per frame (docs/concepts.md has the timing).
 // Limits: GrabCut separates colours; an object coloured like its surroundings, or a box that
@@ -45,15 +49,19 @@ namespace vcar::opencv {
 struct GrabCutParams {
   int iterations = 5;            // cv::grabCut iterations per frame
   float margin = 0.1f;           // box padding on frames other than the reference, of the box's size (box_in)
+  float point_margin = 0.5f;     // the same when the prompt has no box (points lift part of the object)
   float outliers = 0.02f;        // share of the lifted points' projections dropped as extremes (box_in)
   float seed_radius = 0.01f;     // radius of the discs prompt points seed on frame 0, of the image diagonal
   int min_box_px = 4;            // a box thinner than this (pixels) gives no mask
   float min_background = 0.01f;  // a box leaving less of the frame than this outside gives no mask
+  float min_foreground = 0.05f;  // a mask with less foreground than this share of its box is no mask
   std::uint64_t seed = 0x6C8E9CF5u;  // OpenCV's RNG state before each frame
 
   void validate() const {
     if (iterations < 1) throw Error("must be >= 1", "GrabCutParams.iterations");
     if (!(margin >= 0.f)) throw Error("must be >= 0", "GrabCutParams.margin");
+    if (!(point_margin >= 0.f)) throw Error("must be >= 0", "GrabCutParams.point_margin");
+    if (!(min_foreground >= 0.f && min_foreground < 1.f)) throw Error("must be in [0, 1)", "GrabCutParams.min_foreground");
     if (!(outliers >= 0.f && outliers < 1.f)) throw Error("must be in [0, 1)", "GrabCutParams.outliers");
     if (!(seed_radius >= 0.f && seed_radius <= 1.f)) throw Error("must be in [0, 1]", "GrabCutParams.seed_radius");
     if (min_box_px < 1) throw Error("must be >= 1", "GrabCutParams.min_box_px");
@@ -68,7 +76,8 @@ struct GrabCutSeed {
 };
 
 // GrabCut on one image: the foreground mask inside `box` (x0, y0, x1, y1; pixels), or nullopt
-// when the box is degenerate for GrabCut (see min_box_px, min_background). `seeds` are discs of
+// when the box is degenerate for GrabCut (see min_box_px, min_background) or the mask has less
+// foreground than min_foreground of the box. `seeds` are discs of
 // `seed_radius_px`. Throws vcar::Error naming `where` for an image that is not 8-bit RGB and
 // when OpenCV fails.
 inline std::optional<Mask> grabcut(const ImageRGB8& image, const Eigen::Vector4f& box, const GrabCutParams& params = {},
@@ -104,10 +113,16 @@ inline std::optional<Mask> grabcut(const ImageRGB8& image, const Eigen::Vector4f
       cv::grabCut(bgr, labels, rect, bgd_model, fgd_model, params.iterations, cv::GC_INIT_WITH_MASK);
     }
     Mask m(W, H, 1);
+    std::size_t foreground = 0;
     for (int i = 0; i < H; ++i) {
       const std::uint8_t* row = labels.ptr<std::uint8_t>(i);
-      for (int j = 0; j < W; ++j) m.data[static_cast<std::size_t>(i) * W + j] = (row[j] & 1) ? 255 : 0;  // GC_FGD = 1, GC_PR_FGD = 3
+      for (int j = 0; j < W; ++j) {
+        const bool fg = (row[j] & 1) != 0;  // GC_FGD = 1, GC_PR_FGD = 3
+        m.data[static_cast<std::size_t>(i) * W + j] = fg ? 255 : 0;
+        foreground += fg;
+      }
     }
+    if (static_cast<double>(foreground) < params.min_foreground * rect.area()) return std::nullopt;
     return m;
   } catch (const cv::Exception& e) {
     throw Error(std::string("OpenCV failed: ") + e.what(), where);
@@ -128,7 +143,7 @@ public:
   // The box of frame k (see the top of the file), before GrabCut's own checks.
   std::optional<Eigen::Vector4f> box(const FrameSequence& frames, std::size_t k, const Prompt& prompt) const {
     if (k == 0 && prompt.box) return prompt.box;
-    return lifted_.box_for(frames.cameras[k], params_.margin, params_.outliers);
+    return lifted_.box_for(frames.cameras[k], prompt.box ? params_.margin : params_.point_margin, params_.outliers);
   }
 
   void segment(const FrameSequence& frames, const Prompt& prompt, const MaskSink& sink) {
