@@ -112,18 +112,23 @@ int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
   if (!o.images.empty()) photos.emplace(cpu_renderer, o.images, cams);
 
   // Lifted with the CPU renderer: the depth of a PhotoRenderer is the CPU renderer's anyway, and
-  // its alpha (the photograph's: 1 everywhere) is no surface test.
+  // its alpha (the photograph's: 1 everywhere) is no surface test. GrabCut cannot do without
+  // the boxes; an external program got the prompt before "boxes" existed, so there a prompt
+  // that cannot be lifted only costs the boxes.
   std::optional<LiftedPrompt> lifted;
   if ((grabcut || external) && liftable) {
     progress.message("lifting the prompt");
     try {
       lifted = lift_prompt(scene, ref, prompt, cpu_renderer);
     } catch (const Error& e) {
-      throw CliError(exit_bad_input, std::string(e.what()) + " (lifting the prompt to a box on every frame)",
-                     prompt.box ? "--box" : "--points");
+      progress.done();
+      if (grabcut)
+        throw CliError(exit_bad_input, std::string(e.what()) + " (lifting the prompt to a box on every frame)",
+                       prompt.box ? "--box" : "--points");
+      warn(std::string(prompt.box ? "--box: " : "--points: ") + e.what() + ": the segmenter's prompt.json gets no \"boxes\"");
     }
     progress.done();
-    if (external) external->set_boxes([&l = *lifted](std::size_t, const Camera& c) { return l.box_for(c); });
+    if (external && lifted) external->set_boxes([&l = *lifted](std::size_t, const Camera& c) { return l.box_for(c); });
   }
 
   nlohmann::json inputs = {{"scene", o.scene}, {"cameras", o.cameras}, {"images", o.images},

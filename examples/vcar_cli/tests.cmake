@@ -78,6 +78,11 @@ vcar_cli_test(NAME segment_segmenter_cmd_boxes
   FIXTURES_REQUIRED vcar_cli_dataset
   CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DCLEAN=${_cli_work}/seg_cmd_boxes"
          "-DPOSITIVE=${_cli_work}/seg_cmd_boxes/report.json:counts.final|${_cli_work}/seg_cmd_boxes/report.json:inputs.prompt.lifted_gaussians")
+vcar_cli_test(NAME segment_segmenter_cmd_no_boxes_on_empty_space  # a point on no surface: a warning, no boxes
+  ARGS "${_seg_common}|--prompt-view|train_000|--points|1,1|--segmenter-cmd|${_picker}|--set|enable_sss=false|--out|${_cli_work}/seg_cmd_noboxes" RC 0
+  FIXTURES_REQUIRED vcar_cli_dataset
+  CHECKS "-DCLEAN=${_cli_work}/seg_cmd_noboxes"
+         "-DSTDERR_HAS=vcar: warning: --points: prompt on view 'train_000': point 0 shows no surface|prompt.json gets no")
 if(TARGET vcar::opencv)
   vcar_cli_test(NAME segment_grabcut
     ARGS "${_seg_common}|--segmenter|grabcut|--out|${_cli_work}/seg_grabcut" RC 0

@@ -39,6 +39,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdio>
 #include <optional>
 #include <string>
 #include <vector>
@@ -55,6 +56,15 @@
 
 namespace vcar {
 
+namespace detail {
+// A float as printf's %g writes it (0.5, not 0.500000), for messages.
+inline std::string short_float(float v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", static_cast<double>(v));
+  return buf;
+}
+}  // namespace detail
+
 struct LiftParams {
   float surface_band = 0.1f;   // |z - Z(p)| <= surface_band * s: at the rendered surface (front-most)
   float depth_range = 1.f;     // |z - z_ref| <= depth_range * s: the object's depth range
@@ -68,7 +78,7 @@ struct LiftParams {
 
   void validate() const {
     auto in = [](float v, float lo, float hi, const char* name) {
-      if (!(v >= lo && v <= hi)) throw Error("must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]",
+      if (!(v >= lo && v <= hi)) throw Error("must be in [" + detail::short_float(lo) + ", " + detail::short_float(hi) + "]",
                                              std::string("LiftParams.") + name);
     };
     in(surface_band, 0.f, 10.f, "surface_band");
@@ -246,7 +256,7 @@ LiftedPrompt lift_prompt(const GaussianScene& scene, const Camera& reference, co
   const float logit_min = params.opacity_min > 0.f ? std::log(params.opacity_min / (1.f - params.opacity_min)) : -INFINITY;
   for (std::size_t i = 0; i < N; ++i)
     if (scene.opacity_logit[i] >= logit_min) opaque.push_back(static_cast<Index>(i));
-  if (opaque.empty()) throw Error("no Gaussian is at least " + std::to_string(params.opacity_min) + " opaque", where);
+  if (opaque.empty()) throw Error("no Gaussian is at least " + detail::short_float(params.opacity_min) + " opaque", where);
   RenderRequest q;
   q.scene = &scene;
   q.camera = &reference;
@@ -267,7 +277,7 @@ LiftedPrompt lift_prompt(const GaussianScene& scene, const Camera& reference, co
     const float z_ref = detail::median_depth(render, region.shrunk(params.central), params.alpha_min);
     if (!(z_ref > 0.f))
       throw Error(std::string(prompt.box ? "the box" : "point " + std::to_string(r)) +
-                      " shows no surface (rendered alpha below " + std::to_string(params.alpha_min) + ")", where);
+                      " shows no surface (rendered alpha below " + detail::short_float(params.alpha_min) + ")", where);
     // s = max(w / fx, h / fy) z_ref: the region's size in world units at the object's depth.
     const float s = std::max((region.box[2] - region.box[0]) / reference.fx, (region.box[3] - region.box[1]) / reference.fy) * z_ref;
     const float band = params.surface_band * s, range = params.depth_range * s;
