@@ -107,6 +107,16 @@ std::optional<Eigen::Vector4f> mask_box(const vcar::Mask& m) {
   return Eigen::Vector4f(static_cast<float>(x0), static_cast<float>(y0), static_cast<float>(x1 + 1), static_cast<float>(y1 + 1));
 }
 
+// A renderer whose every pixel shows nothing (alpha 0).
+auto empty_renderer(const CubeWall&) {
+  return vcar::make_renderer([](const vcar::RenderRequest& r) {
+    vcar::RenderOutput o;
+    o.rgb = vcar::ImageF(r.camera->width, r.camera->height, 3);
+    o.alpha = o.depth = vcar::ImageF(r.camera->width, r.camera->height, 1);
+    return o;
+  });
+}
+
 }  // namespace
 
 TEST_CASE("box_in: trimmed extremes, margin, clipping, behind the camera, out of view (hand-computed)") {
@@ -253,6 +263,10 @@ TEST_CASE("lift_prompt: errors for bad input name what is wrong") {
   p = {};
   p.points = {{170.f, 60.f}};
   fails(p, "point 0 lies outside the image");
+  p.points = {{80.f, 60.f}, {80.f, 60.f}};
+  p.point_labels = {0, 1};
+  auto nothing = empty_renderer(w);
+  CHECK_THROWS_WITH(vcar::lift_prompt(w.scene, w.reference, p, nothing), Catch::Contains("point 1 shows no surface"));
 
   // The reference view by index: out of range.
   vcar::Prompt q;
@@ -269,12 +283,7 @@ TEST_CASE("lift_prompt: errors for bad input name what is wrong") {
     return o;
   });
   CHECK_THROWS_WITH(vcar::lift_prompt(w.scene, w.reference, q, no_depth), Catch::Contains("returns alpha and depth"));
-  auto empty = vcar::make_renderer([&](const vcar::RenderRequest& r) {
-    vcar::RenderOutput o;
-    o.rgb = vcar::ImageF(r.camera->width, r.camera->height, 3);
-    o.alpha = o.depth = vcar::ImageF(r.camera->width, r.camera->height, 1);
-    return o;
-  });
+  auto empty = empty_renderer(w);
   CHECK_THROWS_WITH(vcar::lift_prompt(w.scene, w.reference, q, empty), Catch::Contains("the box shows no surface"));
   vcar::LiftParams bad;
   bad.central = 0.f;

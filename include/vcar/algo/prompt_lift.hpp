@@ -164,6 +164,7 @@ struct LiftRegion {
   bool disc = false;
   Eigen::Vector2f centre{0, 0};     // disc only
   float radius = 0;                 // disc only (pixels)
+  std::size_t point = 0;            // disc only: the prompt point's index
   bool contains(float u, float v) const {
     if (!(u >= box[0] && u < box[2] && v >= box[1] && v < box[3])) return false;
     return !disc || (Eigen::Vector2f(u, v) - centre).squaredNorm() <= radius * radius;
@@ -229,7 +230,7 @@ LiftedPrompt lift_prompt(const GaussianScene& scene, const Camera& reference, co
   if (prompt.box) {
     const Eigen::Vector4f& b = *prompt.box;
     if (!b.allFinite() || !(b[2] > b[0] && b[3] > b[1]))
-      throw Error("the box is empty (needs x0 < x1 and y0 < y1)", where);
+      throw Error("the box is empty or not finite (needs finite x0 < x1 and y0 < y1)", where);
     if (b[2] <= 0.f || b[3] <= 0.f || b[0] >= W || b[1] >= H) throw Error("the box lies outside the image", where);
     regions.push_back({Eigen::Vector4f(std::max(0.f, b[0]), std::max(0.f, b[1]), std::min(W, b[2]), std::min(H, b[3]))});
   } else {
@@ -243,6 +244,7 @@ LiftedPrompt lift_prompt(const GaussianScene& scene, const Camera& reference, co
       r.disc = true;
       r.centre = p;
       r.radius = radius;
+      r.point = k;
       r.box = {std::max(0.f, p.x() - radius), std::max(0.f, p.y() - radius), std::min(W, p.x() + radius),
                std::min(H, p.y() + radius)};
       regions.push_back(r);
@@ -276,7 +278,7 @@ LiftedPrompt lift_prompt(const GaussianScene& scene, const Camera& reference, co
     const detail::LiftRegion& region = regions[r];
     const float z_ref = detail::median_depth(render, region.shrunk(params.central), params.alpha_min);
     if (!(z_ref > 0.f))
-      throw Error(std::string(prompt.box ? "the box" : "point " + std::to_string(r)) +
+      throw Error(std::string(prompt.box ? "the box" : "point " + std::to_string(region.point)) +
                       " shows no surface (rendered alpha below " + detail::short_float(params.alpha_min) + ")", where);
     // s = max(w / fx, h / fy) z_ref: the region's size in world units at the object's depth.
     const float s = std::max((region.box[2] - region.box[0]) / reference.fx, (region.box[3] - region.box[1]) / reference.fy) * z_ref;
