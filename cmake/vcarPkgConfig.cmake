@@ -1,5 +1,5 @@
-# Writes and installs vcar.pc (vcar::vcar) and, with io, vcar-io.pc (vcar::io and vcar::synth)
-# into <prefix>/share/pkgconfig. Makefile hosts: g++ -std=c++20 $(pkg-config --cflags vcar) ...
+# Writes and installs vcar.pc (vcar::vcar), with io vcar-io.pc (vcar::io and vcar::synth), and
+# with OpenCV vcar-opencv.pc (vcar::opencv) into <prefix>/share/pkgconfig. Makefile hosts: g++ -std=c++20 $(pkg-config --cflags vcar) ...
 set(VCAR_PC_REQUIRES "eigen3 >= 3.4")
 set(VCAR_PC_CFLAGS "")
 set(VCAR_PC_LIBS "")
@@ -22,4 +22,8 @@ install(FILES ${PROJECT_BINARY_DIR}/pkgconfig/vcar.pc DESTINATION ${CMAKE_INSTAL
 if(VCAR_WITH_IO)
   configure_file(${CMAKE_CURRENT_LIST_DIR}/vcar-io.pc.in ${PROJECT_BINARY_DIR}/pkgconfig/vcar-io.pc @ONLY)
   install(FILES ${PROJECT_BINARY_DIR}/pkgconfig/vcar-io.pc DESTINATION ${CMAKE_INSTALL_DATADIR}/pkgconfig)
+endif()
+if(VCAR_HAS_OPENCV)
+  configure_file(${CMAKE_CURRENT_LIST_DIR}/vcar-opencv.pc.in ${PROJECT_BINARY_DIR}/pkgconfig/vcar-opencv.pc @ONLY)
+  install(FILES ${PROJECT_BINARY_DIR}/pkgconfig/vcar-opencv.pc DESTINATION ${CMAKE_INSTALL_DATADIR}/pkgconfig)
 endif()

@@ -6,7 +6,7 @@ the pixels whose colour is within --tol of it (max channel difference). Good eno
 synthetic scenes, whose target has its own colour; used by the protocol tests.
 
     colour_picker.py [--tol T] [--fail STATUS] [--sleep S] [--bad-size] [--garbage]
-                     [--skip K] REQUEST_DIR
+                     [--skip K] [--require-boxes] REQUEST_DIR
 
 Several objects (prompt.json "objects", `vcar segment --prompts`): each object's colour is
 picked on its own frame ("frame") at its first positive point, and its masks go to
@@ -15,7 +15,9 @@ gives each object its own frames).
 
 Misbehaviours for tests: --fail exits with STATUS before writing anything, --sleep waits S
 seconds first, --bad-size writes frame 0's mask one pixel too wide, --garbage writes a mask file
-that is not a PNG, --skip K writes no mask for frame K.
+that is not a PNG, --skip K writes no mask for frame K. --require-boxes checks prompt.json's
+"boxes" (one per frame, [x0, y0, x1, y1] inside the frame or null; frame 0's holds the first
+positive point) and exits with status 65 when they are missing or wrong.
 """
 import json
 import os
@@ -84,8 +86,25 @@ def write_png_grey(path, w, h, rows):
     os.replace(tmp, path)
 
 
+def check_boxes(prompt, cams):
+    """What is wrong with prompt.json's "boxes" (None when nothing)."""
+    boxes = prompt.get("boxes")
+    if not isinstance(boxes, list) or len(boxes) != len(cams):
+        return "expected a list of %d boxes, got %r" % (len(cams), boxes)
+    for k, (b, cam) in enumerate(zip(boxes, cams)):
+        if b is None:
+            continue
+        if len(b) != 4 or not (0 <= b[0] < b[2] <= cam["width"] and 0 <= b[1] < b[3] <= cam["height"]):
+            return "frame %d: %r is not a box inside %dx%d" % (k, b, cam["width"], cam["height"])
+    pts = [p for p, l in zip(prompt["points"], prompt["point_labels"]) if l == 1]
+    b = boxes[0]
+    if pts and (b is None or not (b[0] <= pts[0][0] <= b[2] and b[1] <= pts[0][1] <= b[3])):
+        return "frame 0's box %r does not hold the first positive point %r" % (b, pts[0])
+    return None
+
+
 def main(argv):
-    tol, fail, sleep, bad_size, garbage, skip = 40, None, 0.0, False, False, -1
+    tol, fail, sleep, bad_size, garbage, skip, require_boxes = 40, None, 0.0, False, False, -1, False
     args = argv[1:]
     while len(args) > 1:
         a = args.pop(0)
@@ -101,6 +120,8 @@ def main(argv):
             garbage = True
         elif a == "--skip":
             skip = int(args.pop(0))
+        elif a == "--require-boxes":
+            require_boxes = True
         else:
             print("colour_picker: unknown option " + a, file=sys.stderr)
             return 64
@@ -117,6 +138,11 @@ def main(argv):
         prompt = json.load(f)
     with open(os.path.join(req, "cameras.json")) as f:
         cams = json.load(f)
+    if require_boxes:
+        problem = check_boxes(prompt, cams)
+        if problem:
+            print("colour_picker: prompt.json \"boxes\": " + problem, file=sys.stderr)
+            return 65
     objects = prompt.get("objects")
     if objects is None:  # one object: its prompt is on frame 0, masks in masks/
         objects = [dict(prompt, name="", frame=0, frames=[0, len(cams)])]

@@ -16,7 +16,9 @@
 #include "mask_tally.hpp"
 #include "photo_renderer.hpp"
 #include "scene_inputs.hpp"
+#include "segmenter_grabcut.hpp"
 #include "vcar/algo/pipeline.hpp"
+#include "vcar/algo/prompt_lift.hpp"
 #include "vcar/backends/cpu/tiled_renderer.hpp"
 #include "vcar/io/external_segmenter.hpp"
 #include "vcar/io/image_file.hpp"
@@ -56,6 +58,13 @@ SegmentationResult run_pipeline(const GaussianScene& scene, const std::vector<Ca
 }  // namespace
 
 int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
+  const bool grabcut = o.segmenter == "grabcut";
+  if (grabcut && !has_grabcut())
+    throw CliError(exit_usage, "this build of vcar has no OpenCV, so no GrabCut (install OpenCV, e.g. Debian's "
+                               "libopencv-dev, and configure and build vcar again)", "--segmenter grabcut");
+  if (grabcut && !o.prompts.empty())
+    throw CliError(exit_usage, "GrabCut segments one object: give --prompt-view with --box or --points, not --prompts",
+                   "--segmenter grabcut");
   if (!o.prompts.empty()) return run_segment_objects(o, g);
   const auto t0 = std::chrono::steady_clock::now();
   ProgressLine progress(g.quiet);
@@ -69,6 +78,13 @@ int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
   prompt.text = o.text;
   if (!o.segmenter_cmd.empty() && prompt.points.empty() && !prompt.box && prompt.text.empty())
     throw CliError(exit_usage, "an external segmenter needs a prompt: --points, --box or --text", "--segmenter-cmd");
+  // A prompt lifted to 3D gives a box on every frame (algo/prompt_lift.hpp): GrabCut's, and the
+  // external segmenter's prompt.json "boxes". It needs a box or a positive point.
+  bool liftable = prompt.box.has_value();
+  for (std::size_t k = 0; k < prompt.points.size(); ++k)
+    liftable = liftable || k >= prompt.point_labels.size() || prompt.point_labels[k] != 0;  // a positive point
+  if (grabcut && !liftable)
+    throw CliError(exit_usage, "GrabCut needs a box on every frame: give --box or positive --points", "--segmenter grabcut");
   if (!o.state_ply.empty() && fs::is_directory(o.state_ply))
     throw CliError(exit_usage, "is a directory; give a file name", o.state_ply + " (--state-ply)");
 
@@ -95,6 +111,26 @@ int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
   std::optional<PhotoRenderer> photos;
   if (!o.images.empty()) photos.emplace(cpu_renderer, o.images, cams);
 
+  // Lifted with the CPU renderer: the depth of a PhotoRenderer is the CPU renderer's anyway, and
+  // its alpha (the photograph's: 1 everywhere) is no surface test. GrabCut cannot do without
+  // the boxes; an external program got the prompt before "boxes" existed, so there a prompt
+  // that cannot be lifted only costs the boxes.
+  std::optional<LiftedPrompt> lifted;
+  if ((grabcut || external) && liftable) {
+    progress.message("lifting the prompt");
+    try {
+      lifted = lift_prompt(scene, ref, prompt, cpu_renderer);
+    } catch (const Error& e) {
+      progress.done();
+      if (grabcut)
+        throw CliError(exit_bad_input, std::string(e.what()) + " (lifting the prompt to a box on every frame)",
+                       prompt.box ? "--box" : "--points");
+      warn(std::string(prompt.box ? "--box: " : "--points: ") + e.what() + ": the segmenter's prompt.json gets no \"boxes\"");
+    }
+    progress.done();
+    if (external && lifted) external->set_boxes([&l = *lifted](std::size_t, const Camera& c) { return l.box_for(c); });
+  }
+
   nlohmann::json inputs = {{"scene", o.scene}, {"cameras", o.cameras}, {"images", o.images},
                            {"prompt_view", ref.name}, {"preset", o.preset}, {"set", o.sets},
                            {"views", cams.size()}, {"opengl_cameras", o.opengl_cameras},
@@ -103,6 +139,7 @@ int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
                        {"text", prompt.text}};
   for (const auto& p : prompt.points) pj["points"].push_back({p.x(), p.y()});
   if (prompt.box) pj["box"] = {(*prompt.box)[0], (*prompt.box)[1], (*prompt.box)[2], (*prompt.box)[3]};
+  if (lifted) pj["lifted_gaussians"] = lifted->indices.size();
   inputs["prompt"] = pj;
 
   OutputDir out(o.out);
@@ -144,6 +181,12 @@ int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
     if (!o.keep_requests) {
       std::error_code ec;
       fs::remove(out.path() / "requests", ec);  // only when empty: failed requests stay for inspection
+    }
+  } else if (grabcut) {
+    inputs["segmenter"] = o.segmenter;
+    if constexpr (has_grabcut()) {  // make_grabcut_segmenter exists only in builds with OpenCV
+      auto seg = make_streaming_segmenter(make_grabcut_segmenter(std::move(*lifted)));
+      result = tallied(seg, nullptr, counts);
     }
   } else {
     inputs["oracle"] = o.oracle;

@@ -13,7 +13,8 @@ struct GlobalOptions {
 
 struct SegmentOptions {
   std::string scene, cameras, images, prompt_view, out;
-  std::string masks, segmenter_cmd, oracle;  // exactly one
+  std::string masks, segmenter_cmd, oracle;  // exactly one of these or `segmenter`
+  std::string segmenter;                     // a built-in segmenter: "grabcut" (builds with OpenCV)
   std::string preset = "robust";
   std::vector<std::string> sets;
   std::string points, box, text;

@@ -76,8 +76,9 @@ std::string usage_message(const CLI::App& app, const CLI::ParseError& e, int arg
                             (sub->get_name() == "segment" && opt->get_name() == "--prompt-view" && sub->count("--prompts") == 0);
       if (required && opt->count() == 0) { missing += (n++ ? ", " : "") + opt->get_name(); }
     }
-    if (sub->get_name() == "segment" && sub->count("--masks") + sub->count("--segmenter-cmd") + sub->count("--oracle") == 0)
-      missing += (n++ ? ", " : "") + std::string("one of --masks, --segmenter-cmd or --oracle");
+    if (sub->get_name() == "segment" &&
+        sub->count("--masks") + sub->count("--segmenter-cmd") + sub->count("--segmenter") + sub->count("--oracle") == 0)
+      missing += (n++ ? ", " : "") + std::string("one of --masks, --segmenter-cmd, --segmenter or --oracle");
     if (n > 0) return sub->get_name() + ": missing " + missing;
   }
   if (dynamic_cast<const CLI::ExtrasError*>(&e)) {
@@ -135,8 +136,13 @@ int main(int argc, char** argv) {
   auto* o_masks = c_seg->add_option("--masks", seg.masks, "Folder of masks named like the views");
   auto* o_cmd = c_seg->add_option("--segmenter-cmd", seg.segmenter_cmd, "External segmenter command (protocol: docs/cli.md)");
   auto* o_oracle = c_seg->add_option("--oracle", seg.oracle, "Synthetic dataset dir: ground-truth masks rendered per frame");
-  o_masks->excludes(o_cmd)->excludes(o_oracle);
-  o_cmd->excludes(o_oracle);
+  auto* o_builtin = c_seg->add_option("--segmenter", seg.segmenter,
+                                      "Built-in segmenter: grabcut (OpenCV's GrabCut on each frame, its box lifted from "
+                                      "--box or --points; builds with OpenCV only)")
+                        ->check(CLI::IsMember({"grabcut"}));
+  o_masks->excludes(o_cmd)->excludes(o_oracle)->excludes(o_builtin);
+  o_cmd->excludes(o_oracle)->excludes(o_builtin);
+  o_oracle->excludes(o_builtin);
   c_seg->add_option("--preset", seg.preset, "Parameter preset")
       ->check(CLI::IsMember({"robust", "nvos", "lerf", "reference_code"}))->capture_default_str();
   c_seg->add_option("--set", seg.sets, "Override a parameter: key=value (repeatable)")->take_all()
@@ -196,8 +202,8 @@ int main(int argc, char** argv) {
     if (*c_seg) {
       std::string missing;
       if (seg.prompt_view.empty() && seg.prompts.empty()) missing = "--prompt-view (or --prompts)";
-      if (seg.masks.empty() && seg.segmenter_cmd.empty() && seg.oracle.empty())
-        missing += (missing.empty() ? "" : ", ") + std::string("one of --masks, --segmenter-cmd or --oracle");
+      if (seg.masks.empty() && seg.segmenter_cmd.empty() && seg.segmenter.empty() && seg.oracle.empty())
+        missing += (missing.empty() ? "" : ", ") + std::string("one of --masks, --segmenter-cmd, --segmenter or --oracle");
       if (!missing.empty()) throw CliError(exit_usage, "missing " + missing, "segment");
       return run_segment(seg, g);
     }

@@ -25,7 +25,7 @@ endfunction()
 # ---- usage ---------------------------------------------------------------------------------
 vcar_cli_test(NAME help ARGS "--help" RC 0)
 vcar_cli_test(NAME usage_missing_option ARGS "segment|--scene|x.ply" RC 1
-  CHECKS "-DSTDERR_HAS=vcar: error: segment: missing --cameras, --prompt-view, --out, one of --masks, --segmenter-cmd or --oracle")
+  CHECKS "-DSTDERR_HAS=vcar: error: segment: missing --cameras, --prompt-view, --out, one of --masks, --segmenter-cmd, --segmenter or --oracle")
 vcar_cli_test(NAME usage_no_command ARGS "" RC 1 CHECKS "-DSTDERR_HAS=vcar: error: no command given")
 vcar_cli_test(NAME usage_unknown_command ARGS "-q|frobnicate" RC 1
   CHECKS "-DSTDERR_HAS=vcar: error: unknown command 'frobnicate'; commands: demo" "-DSTDERR_LACKS=A subcommand")
@@ -124,6 +124,35 @@ vcar_cli_test(NAME segment_segmenter_cmd
   CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DCLEAN=${_cli_work}/seg_cmd"
          "-DJSON_KEYS=${_cli_work}/seg_cmd/report.json:${_report_keys}|${_cli_work}/seg_cmd/selection.json:indices"
          "-DPOSITIVE=${_cli_work}/seg_cmd/report.json:counts.final")
+# The prompt lifted to 3D: a box on every frame (prompt.json "boxes"; GrabCut's boxes).
+vcar_cli_test(NAME segment_segmenter_cmd_boxes
+  ARGS "${_seg_common}|--segmenter-cmd|${_picker} --require-boxes|--set|force_fine_round=true|--out|${_cli_work}/seg_cmd_boxes" RC 0
+  FIXTURES_REQUIRED vcar_cli_dataset
+  CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DCLEAN=${_cli_work}/seg_cmd_boxes"
+         "-DPOSITIVE=${_cli_work}/seg_cmd_boxes/report.json:counts.final|${_cli_work}/seg_cmd_boxes/report.json:inputs.prompt.lifted_gaussians")
+vcar_cli_test(NAME segment_segmenter_cmd_no_boxes_on_empty_space  # a point on no surface: a warning, no boxes
+  ARGS "${_seg_common}|--prompt-view|train_000|--points|1,1|--segmenter-cmd|${_picker}|--set|enable_sss=false|--out|${_cli_work}/seg_cmd_noboxes" RC 0
+  FIXTURES_REQUIRED vcar_cli_dataset
+  CHECKS "-DCLEAN=${_cli_work}/seg_cmd_noboxes"
+         "-DSTDERR_HAS=vcar: warning: --points: prompt on view 'train_000': point 0 shows no surface|prompt.json gets no")
+if(TARGET vcar::opencv)
+  vcar_cli_test(NAME segment_grabcut
+    ARGS "${_seg_common}|--segmenter|grabcut|--out|${_cli_work}/seg_grabcut" RC 0
+    FIXTURES_REQUIRED vcar_cli_dataset
+    CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DCLEAN=${_cli_work}/seg_grabcut"
+           "-DJSON_KEYS=${_cli_work}/seg_grabcut/report.json:${_report_keys}"
+           "-DEQUALS=${_cli_work}/seg_grabcut/report.json:inputs.segmenter:grabcut"
+           "-DPOSITIVE=${_cli_work}/seg_grabcut/report.json:counts.final")
+  vcar_cli_test(NAME segment_grabcut_needs_box_or_points
+    ARGS "${_seg_common}|--prompt-view|train_000|--text|the box|--segmenter|grabcut|--out|${_cli_work}/seg_grabcut_text" RC 1
+    FIXTURES_REQUIRED vcar_cli_dataset
+    CHECKS "-DSTDERR_HAS=--segmenter grabcut: GrabCut needs a box on every frame" "-DABSENT=${_cli_work}/seg_grabcut_text")
+else()
+  vcar_cli_test(NAME segment_grabcut_without_opencv
+    ARGS "${_seg_common}|--prompt-view|train_000|--box|1,1,20,20|--segmenter|grabcut|--out|${_cli_work}/seg_grabcut_none" RC 1
+    FIXTURES_REQUIRED vcar_cli_dataset
+    CHECKS "-DSTDERR_HAS=--segmenter grabcut: this build of vcar has no OpenCV" "-DABSENT=${_cli_work}/seg_grabcut_none")
+endif()
 vcar_cli_test(NAME segment_oracle
   ARGS "${_seg_common}|--oracle|${_cli_ds}|--out|${_cli_work}/seg_oracle" RC 0
   FIXTURES_REQUIRED vcar_cli_dataset

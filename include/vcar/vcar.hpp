@@ -28,5 +28,6 @@
 #include "vcar/algo/boundary_refinement.hpp"
 #include "vcar/algo/pipeline.hpp"
 #include "vcar/algo/reselection.hpp"
+#include "vcar/algo/prompt_lift.hpp"
 
 #include "vcar/backends/cpu/tiled_renderer.hpp"

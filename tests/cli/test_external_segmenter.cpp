@@ -129,6 +129,7 @@ TEST_CASE("ExternalSegmenter runs the program and reads its masks") {
   CHECK(p["point_labels"][0] == 1);
   CHECK(p["text"] == "the red part");
   CHECK(p["box"].is_null());
+  CHECK_FALSE(p.contains("boxes"));  // no boxes unless a caller sets them
 
   // Second round: a fresh directory and the round counter moves on.
   vcar::segment_all(s, fx.frames(), fx.prompt);
@@ -326,4 +327,25 @@ TEST_CASE("ExternalSegmenter::segment_objects: a batched round asks each object 
   CHECK_THAT(bad({"red", red, 1, 5}), Catch::Contains("frames out of range"));
   CHECK_THAT(bad({"red", red, 4, 1}), Catch::Contains("first frame out of range"));
   CHECK_THAT(bad({"blue", blue, 0, 2}), Catch::Contains("prompt frame outside its frames"));
+}
+
+TEST_CASE("ExternalSegmenter writes one box per frame to prompt.json when given boxes") {
+  Fixture fx;
+  auto o = fx.options();
+  o.keep_requests = true;
+  ExternalSegmenter s("/usr/bin/python3 " + picker, o);
+  std::vector<std::string> asked;  // the frames' views, in the order asked
+  s.set_boxes([&](std::size_t k, const vcar::Camera& c) -> std::optional<Eigen::Vector4f> {
+    asked.push_back(c.name);
+    if (k == 1) return std::nullopt;  // out of view
+    return Eigen::Vector4f(1.5f + static_cast<float>(k), 2.f, 20.f, 22.25f);
+  });
+  vcar::segment_all(s, fx.frames(), fx.prompt);
+  CHECK(asked == std::vector<std::string>{"view_0", "view_1", "view_2"});
+  std::ifstream pj(s.last_request_dir() / "prompt.json");
+  const auto p = nlohmann::json::parse(pj);
+  REQUIRE(p["boxes"].size() == 3);
+  CHECK(p["boxes"][0] == nlohmann::json{1.5, 2.0, 20.0, 22.25});
+  CHECK(p["boxes"][1].is_null());
+  CHECK(p["boxes"][2] == nlohmann::json{3.5, 2.0, 20.0, 22.25});
 }

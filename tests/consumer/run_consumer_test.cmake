@@ -46,7 +46,7 @@ execute_process(COMMAND ${keep} -M WORKING_DIRECTORY ${WORK_DIR}/consumer-build
 if(NOT rc EQUAL 0 OR NOT deps MATCHES "vcar/vcar\\.hpp" OR NOT deps MATCHES "vcar/algo/pipeline\\.hpp")
   message(FATAL_ERROR "-M of the umbrella failed (${rc}): ${keep}")
 endif()
-foreach(forbidden nlohmann stb_image "vcar/io/" "vcar/synth/" "vcar/baselines/")
+foreach(forbidden nlohmann stb_image opencv "vcar/io/" "vcar/synth/" "vcar/baselines/")
   string(FIND "${deps}" "${forbidden}" at)
   if(NOT at EQUAL -1)
     message(FATAL_ERROR "<vcar/vcar.hpp> reaches '${forbidden}':\n${deps}")

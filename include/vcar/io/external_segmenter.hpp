@@ -12,7 +12,10 @@
 //                            "cx", "cy" (the Inria layout assumes a centred principal point);
 //      prompt.json           {"points": [[u, v], ...], "point_labels": [1, 0, ...],
 //                             "box": [x0, y0, x1, y1] or null, "text": "...",
-//                             "round": r, "frames": n}
+//                             "round": r, "frames": n}, and with ExternalSegmenterOptions::boxes
+//                            "boxes": [[x0, y0, x1, y1] or null, ...], one per frame in frame
+//                            order, pixels of that frame (the prompt lifted to 3D and boxed in
+//                            each frame: vcar::lift_prompt, LiftedPrompt::box_for);
 //  - the program writes masks/00000.png ... (8-bit, any channel count, foreground >= 128 as
 //    io::read_mask reads it; a missing file means "no mask" for that frame) and exits with
 //    status 0.
@@ -36,11 +39,13 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
 #include "vcar/concepts/segmenter.hpp"
@@ -121,6 +126,10 @@ struct ExternalSegmenterOptions {
   std::function<bool()> cancelled;       // polled while the program runs; true kills it
   // Called before each frame is rendered and about every 0.25 s while the program runs.
   std::function<void(const ExternalProgress&)> progress;
+  // The prompt's box on frame k of a round (its camera given), nullopt where the object is out
+  // of view: prompt.json's "boxes" (one-object rounds only). Unset: no "boxes". A caller that
+  // lifted the prompt: [lifted](std::size_t, const Camera& c) { return lifted.box_for(c); }.
+  std::function<std::optional<Eigen::Vector4f>(std::size_t frame, const Camera&)> boxes;
 };
 
 class ExternalSegmenter {
@@ -229,6 +238,11 @@ private:
 
 public:
 
+  // Sets ExternalSegmenterOptions::boxes (e.g. once the scene is read and the prompt lifted).
+  void set_boxes(std::function<std::optional<Eigen::Vector4f>(std::size_t, const Camera&)> boxes) {
+    options_.boxes = std::move(boxes);
+  }
+
   std::size_t rounds() const noexcept { return round_; }
   Failure failure() const noexcept { return failure_; }
   const std::vector<std::string>& argv() const noexcept { return argv_; }
@@ -302,6 +316,14 @@ private:
     nlohmann::json p = prompt_json(prompt);
     p["round"] = round_;
     p["frames"] = frames.size();
+    if (options_.boxes && !objects) {
+      nlohmann::json boxes = nlohmann::json::array();
+      for (std::size_t k = 0; k < frames.size(); ++k) {
+        const std::optional<Eigen::Vector4f> b = options_.boxes(k, frames.cameras[k]);
+        boxes.push_back(b ? nlohmann::json{(*b)[0], (*b)[1], (*b)[2], (*b)[3]} : nlohmann::json(nullptr));
+      }
+      p["boxes"] = std::move(boxes);
+    }
     if (objects) {
       nlohmann::json list = nlohmann::json::array();
       for (const Object& o : *objects) {
