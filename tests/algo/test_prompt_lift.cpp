@@ -14,6 +14,7 @@
 // core headers (as tests/arch/arch_fingerprint.cpp uses them).
 #include "vcar/io/ply.hpp"
 #include "vcar/synth/ground_truth.hpp"
+#include "vcar/synth/prompt.hpp"
 #include "vcar/synth/rigs.hpp"
 #include "vcar/synth/world.hpp"
 
@@ -97,15 +98,7 @@ bool contains(const Eigen::Vector4f& outer, const Eigen::Vector4f& inner) {
   return outer[0] <= inner[0] && outer[1] <= inner[1] && outer[2] >= inner[2] && outer[3] >= inner[3];
 }
 
-// Bounding box (x0, y0, x1, y1; pixel edges) of a mask's foreground; nullopt when empty.
-std::optional<Eigen::Vector4f> mask_box(const vcar::Mask& m) {
-  int x0 = m.width, y0 = m.height, x1 = -1, y1 = -1;
-  for (int i = 0; i < m.height; ++i)
-    for (int j = 0; j < m.width; ++j)
-      if (m(j, i)) { x0 = std::min(x0, j); x1 = std::max(x1, j); y0 = std::min(y0, i); y1 = std::max(y1, i); }
-  if (x1 < 0) return std::nullopt;
-  return Eigen::Vector4f(static_cast<float>(x0), static_cast<float>(y0), static_cast<float>(x1 + 1), static_cast<float>(y1 + 1));
-}
+using vcar::synth::mask_box;  // the box a user would drag around a mask
 
 // A renderer whose every pixel shows nothing (alpha 0).
 auto empty_renderer(const CubeWall&) {
@@ -320,7 +313,7 @@ TEST_CASE("a box on a trained object (donut.ply on the synthetic table) reprojec
     }
   }
   std::vector<Eigen::Vector4f> silhouette;  // the whole donut's box in each view
-  for (const Camera& c : views) silhouette.push_back(*mask_box(vcar::synth::silhouette_mask(w, c, 9, renderer)));
+  for (const Camera& c : views) silhouette.push_back(mask_box(vcar::synth::silhouette_mask(w, c, 9, renderer)));
 
   // The prompt: the box of what the reference view shows of the donut, as a user would draw it.
   float min_iou = 1.f, min_cover = 1.f;

@@ -16,6 +16,7 @@
 // The real-object scene: these need only core headers (as tests/arch/arch_fingerprint.cpp).
 #include "vcar/io/ply.hpp"
 #include "vcar/synth/ground_truth.hpp"
+#include "vcar/synth/prompt.hpp"
 #include "vcar/synth/rigs.hpp"
 #include "vcar/synth/world.hpp"
 
@@ -37,14 +38,7 @@ double iou(const Mask& a, const Mask& b) {
   return uni ? static_cast<double>(inter) / static_cast<double>(uni) : 1.0;
 }
 
-std::optional<Eigen::Vector4f> mask_box(const Mask& m) {
-  int x0 = m.width, y0 = m.height, x1 = -1, y1 = -1;
-  for (int i = 0; i < m.height; ++i)
-    for (int j = 0; j < m.width; ++j)
-      if (m(j, i)) { x0 = std::min(x0, j); x1 = std::max(x1, j); y0 = std::min(y0, i); y1 = std::max(y1, i); }
-  if (x1 < 0) return std::nullopt;
-  return Eigen::Vector4f(static_cast<float>(x0), static_cast<float>(y0), static_cast<float>(x1 + 1), static_cast<float>(y1 + 1));
-}
+using vcar::synth::mask_box;  // the box a user would drag around a mask
 
 // A 120 x 90 image: a noisy blue background with discs (centre, radius, colour), and the mask of
 // each disc.
