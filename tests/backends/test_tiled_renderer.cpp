@@ -91,7 +91,7 @@ BruteForce brute_force(const vcar::RenderRequest& q, const vcar::Mask* mask = nu
   return out;
 }
 
-vcar::Camera camera(int W, int H) {
+vcar::Camera random_view_camera(int W, int H) {
   vcar::Intrinsics k{W, H, 0.9f * W, 0.9f * W, 0.5f * W + 1.3f, 0.5f * H - 0.7f};
   return vcar::Camera::look_at(Eigen::Vector3f(0.2f, -0.3f, -3.f), Eigen::Vector3f(0, 0, 0),
                                Eigen::Vector3f(0, -1, 0), k, "random view");
@@ -158,7 +158,7 @@ void check_contributions(const vcar::Contributions& acc, const BruteForce& ref) 
 TEST_CASE("tiled renderer matches the brute-force renderer on random scenes") {
   // Odd sizes: edge tiles are partial; Gaussians cross tile borders everywhere.
   const int W = 101, H = 67;
-  const vcar::Camera cam = camera(W, H);
+  const vcar::Camera cam = random_view_camera(W, H);
   for (unsigned seed : {1u, 2u, 3u}) {
     const vcar::GaussianScene sc = random_scene(400, seed, cam, int(seed));
     vcar::RenderRequest q;
@@ -180,7 +180,7 @@ TEST_CASE("tiled renderer matches the brute-force renderer on random scenes") {
 
 TEST_CASE("subset and log-scale override render only the drawn Gaussians with new scales") {
   const int W = 80, H = 64;
-  const vcar::Camera cam = camera(W, H);
+  const vcar::Camera cam = random_view_camera(W, H);
   const vcar::GaussianScene sc = random_scene(300, 9, cam);
   std::vector<Index> subset;
   for (int i = 299; i > 0; i -= 3) subset.push_back(Index(i));  // any order
@@ -216,7 +216,7 @@ TEST_CASE("subset and log-scale override render only the drawn Gaussians with ne
 
 TEST_CASE("the stand-ins for infinite opacity logits render as opacity 1 and 0") {
   const int W = 80, H = 64;
-  const vcar::Camera cam = camera(W, H);
+  const vcar::Camera cam = random_view_camera(W, H);
   vcar::GaussianScene sc = random_scene(300, 11, cam);
   // Every third Gaussian transparent (as a file's -inf reads), every seventh opaque (+inf).
   std::vector<Index> kept;
@@ -243,7 +243,7 @@ TEST_CASE("the stand-ins for infinite opacity logits render as opacity 1 and 0")
 
 TEST_CASE("contribution sums match the brute force") {
   const int W = 96, H = 70;
-  const vcar::Camera cam = camera(W, H);
+  const vcar::Camera cam = random_view_camera(W, H);
   const vcar::GaussianScene sc = random_scene(350, 4, cam);
   const vcar::Mask mask = random_mask(W, H);
   vcar::RenderRequest q;
@@ -276,7 +276,7 @@ TEST_CASE("contribution sums match the brute force") {
 }
 
 TEST_CASE("equal depths: the lower drawn index is in front") {
-  const vcar::Camera cam = camera(48, 48);
+  const vcar::Camera cam = random_view_camera(48, 48);
   vcar::GaussianScene sc;
   sc.resize(2, 0);
   const Eigen::Vector3f mu = cam.position() + 3.f * cam.forward();
@@ -300,7 +300,7 @@ TEST_CASE("equal depths: the lower drawn index is in front") {
 
 TEST_CASE("one thread and many threads give bit-identical results") {
   const int W = 160, H = 120;
-  const vcar::Camera cam = camera(W, H);
+  const vcar::Camera cam = random_view_camera(W, H);
   const vcar::GaussianScene sc = random_scene(3000, 21, cam);
   const vcar::Mask mask = random_mask(W, H);
   vcar::RenderRequest q;
@@ -331,7 +331,7 @@ TEST_CASE("one thread and many threads give bit-identical results") {
 }
 
 TEST_CASE("an empty draw is the background; bad input names the culprit") {
-  const vcar::Camera cam = camera(33, 20);
+  const vcar::Camera cam = random_view_camera(33, 20);
   const vcar::GaussianScene sc = random_scene(10, 1, cam);
   std::vector<Index> none;
   vcar::RenderRequest q;
