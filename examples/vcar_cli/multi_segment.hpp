@@ -140,6 +140,10 @@ void refine_objects(const GaussianScene& scene, const std::vector<Camera>& train
     FrameSequence seq;
     seq.cameras = frames;
     seq.subset = true;
+    seq.drawn = [&](std::size_t k) -> const std::vector<Index>* {  // each frame its own object's G_coarse
+      if (k >= frames.size()) throw Error("frame " + std::to_string(k) + " out of range", "fine round (all objects)");
+      return &refine[owner[k]]->coarse_set();
+    };
     seq.image = [&](std::size_t k) -> ImageRGB8 {
       if (k >= frames.size()) throw Error("frame " + std::to_string(k) + " out of range", "fine round (all objects)");
       const std::size_t o = owner[k];

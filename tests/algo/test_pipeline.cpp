@@ -269,6 +269,48 @@ TEST_CASE("robust preset: fine-round frames render a subset (FrameSequence::subs
   CHECK(renders >= static_cast<int>(cams.size() + cams.size() + 32));
 }
 
+TEST_CASE("FrameSequence::drawn: unset in the coarse round (the whole scene), the rendered subset in the fine round") {
+  auto w = two_blobs();
+  const auto cams = forward_rig();
+  std::vector<std::vector<vcar::Index>> rendered;  // the subset of each render (empty: the whole scene)
+  std::vector<bool> whole;
+  auto renderer = vcar::make_renderer([&](const vcar::RenderRequest& q) {
+    whole.push_back(q.subset == nullptr);
+    rendered.push_back(q.subset ? *q.subset : std::vector<vcar::Index>{});
+    vcar::RenderOutput out;
+    out.rgb = vcar::ImageF(q.camera->width, q.camera->height, 3, 0.f);
+    out.alpha = vcar::ImageF(q.camera->width, q.camera->height, 1, 0.f);
+    if (q.want_depth) out.depth = vcar::ImageF(q.camera->width, q.camera->height, 1, 0.f);
+    return out;
+  });
+  int rounds = 0, fine_frames = 0;
+  auto seg = vcar::make_segmenter([&](const vcar::FrameSequence& f, const vcar::Prompt&) {
+    ++rounds;
+    CHECK(static_cast<bool>(f.drawn) == f.subset);
+    std::vector<std::optional<vcar::Mask>> masks;
+    for (std::size_t k = 0; k < f.size(); ++k) {
+      (void)f.image(k);
+      if (f.drawn) {  // names exactly what frame k's render drew
+        const std::vector<vcar::Index>* d = f.drawn(k);
+        REQUIRE(d != nullptr);
+        REQUIRE_FALSE(whole.back());
+        CHECK(*d == rendered.back());
+        ++fine_frames;
+      } else {
+        CHECK(whole.back());
+      }
+      masks.emplace_back(blob_a_mask(f.cameras[k]));
+    }
+    return masks;
+  });
+  vcar::Prompt prompt;
+  prompt.reference_view = 4;
+  const auto r = vcar::segment(w.scene, cams, prompt, renderer, seg);
+  CHECK(rounds == 2);
+  CHECK(fine_frames > 0);
+  CHECK(same_set(r.indices, w.a));
+}
+
 TEST_CASE("Eq. R8: ABR reads the training masks widened by their undershoot only when the fine vote is split") {
   auto w = two_blobs();
   const auto cams = forward_rig();

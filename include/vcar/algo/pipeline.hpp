@@ -140,6 +140,7 @@ RoundTimes run_round(std::string_view round, const GaussianScene& scene,
   FrameSequence seq;
   seq.cameras = frames;
   seq.subset = subset != nullptr;
+  if (subset) seq.drawn = [subset](std::size_t) { return subset; };
   seq.image = [&](std::size_t k) -> ImageRGB8 {
     if (k >= frames.size()) throw Error("frame " + std::to_string(k) + " out of range", std::string(round));
     const auto tr = Clock::now();

@@ -8,6 +8,11 @@
 //  - `frames.image(k)` renders frame k on demand as 8-bit RGB (width x height x 3). It renders
 //    on every call: a segmenter that needs pixels calls it once per frame; one that does not
 //    (an oracle, a mask folder) never pays for rendering.
+//  - `frames.subset` is true when the frames render a subset of the scene (the fine round renders
+//    G_coarse only); `frames.drawn(k)`, when the function is set, names the Gaussians frame k
+//    draws (indices into the scene; null: the whole scene), for segmenters that model what a
+//    render shows (the synthetic oracle's rendered mode). An empty function means the whole
+//    scene where `subset` is false, unknown where it is true.
 //  - `prompt` is passed through unchanged: points (pixels of the reference view, label 1 =
 //    positive, 0 = negative), an optional box (x0, y0, x1, y1) or text.
 //  - the segmenter calls `sink(k, &mask)` for each frame k it has a mask for, or `sink(k,
@@ -35,6 +40,7 @@
 #include <Eigen/Core>
 
 #include "vcar/core/camera.hpp"
+#include "vcar/core/gaussian_scene.hpp"
 #include "vcar/core/image.hpp"
 
 namespace vcar {
@@ -53,6 +59,9 @@ struct FrameSequence {
   // true when the frames render a subset of the scene (the fine round renders G_coarse only):
   // occluders outside the subset are not in the images, so masks should not be cut by them.
   bool subset = false;
+  // The Gaussians frame k draws (null: the whole scene); empty: see the top of this file. The
+  // vector pointed to lives at least as long as the call of segment().
+  std::function<const std::vector<Index>*(std::size_t)> drawn;
   std::size_t size() const noexcept { return cameras.size(); }
 };
 
