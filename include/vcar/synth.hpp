@@ -7,6 +7,8 @@
 #include "vcar/synth/rigs.hpp"
 #include "vcar/synth/ground_truth.hpp"
 #include "vcar/synth/mask_ops.hpp"
+#include "vcar/synth/rendered_labels.hpp"
+#include "vcar/synth/sam_failures.hpp"
 #include "vcar/synth/oracle_segmenter.hpp"
 #include "vcar/synth/prompt.hpp"
 #include "vcar/synth/object_prompts.hpp"

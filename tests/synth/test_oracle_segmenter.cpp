@@ -1,5 +1,8 @@
 #include <catch2/catch.hpp>
 
+#include <set>
+
+#include "vcar/backends/cpu/tiled_renderer.hpp"
 #include "vcar/synth/oracle_segmenter.hpp"
 #include "vcar/synth/rigs.hpp"
 
@@ -188,4 +191,212 @@ TEST_CASE("FrameCasts: oracles of one frame share its cast where they see it who
   const auto near = front("train_000"), moved = front("train_001", 0.3f);
   (void)target.mask(near, 0, false, casts);
   CHECK(target.mask(moved, 1, false, casts)->data == visible_mask(w, moved, 1).data);
+}
+
+// ---- the rendered (honest) mode and the SAM-like failures -------------------------------------
+
+namespace {
+// A generated world of Gaussians and a camera on the neighbour's side (+x of the target), so the
+// neighbour stands in front of part of the target.
+struct GaussianWorld {
+  World w;
+  vcar::Camera cam;
+};
+const GaussianWorld& gaussian_world() {
+  static const GaussianWorld g = [] {
+    WorldParams p;
+    p.seed = 3;
+    p.n_gaussians = 30000;
+    GaussianWorld out{generate_world(p), {}};
+    const auto [c, r] = out.w.bounds(out.w.target_id);
+    out.cam = vcar::Camera::look_at(c + Eigen::Vector3f(4.f * r, -1.5f * r, 1.5f * r), c, {0, 0, 1},
+                                    make_intrinsics(160, 120), "train_000");
+    return out;
+  }();
+  return g;
+}
+OracleParams rendered_params() {
+  OracleParams p;
+  p.mode = OracleMode::rendered;
+  return p;
+}
+std::size_t overlap(const vcar::Mask& a, const vcar::Mask& b) {
+  std::size_t n = 0;
+  for (std::size_t k = 0; k < a.data.size(); ++k) n += a.data[k] && b.data[k];
+  return n;
+}
+}  // namespace
+
+TEST_CASE("rendered mode: the target's dominant pixels of what the frame draws; needs a renderer and the drawn set") {
+  const auto& [w, cam] = gaussian_world();
+  vcar::cpu::TiledRenderer renderer;
+  const OracleSegmenter oracle(w, rendered_params(), renderer);
+  const RenderedLabels labels(w);
+  OracleSegmenter::FrameCasts casts;
+  const auto whole = oracle.mask(cam, 0, false, casts, nullptr);
+  REQUIRE(whole);
+  CHECK(whole->data == mask_of(labels.label_image(cam, nullptr, renderer), w.target_id).data);
+  const vcar::Mask vis = visible_mask(w, cam, w.target_id);
+  // The render shows what the ray cast sees, up to a band along the contour (79% of the visible
+  // mask here: a small, mostly hidden target at 160 x 120; test_rendered_labels measures the band).
+  CHECK(overlap(*whole, vis) > count(vis) * 3 / 4);
+  CHECK_THROWS_AS(OracleSegmenter(w, rendered_params()), vcar::Error);  // no renderer
+  OracleSegmenter::FrameCasts c2;
+  CHECK_THROWS_AS(oracle.mask(cam, 0, true, c2, nullptr), vcar::Error);  // a subset, but which?
+}
+
+TEST_CASE("rendered mode: a subset without the target gives an empty mask; a foreign object's Gaussians stay out; dropped pieces are missing") {
+  const auto& [w, cam] = gaussian_world();
+  vcar::cpu::TiledRenderer renderer;
+  const OracleSegmenter honest(w, rendered_params(), renderer);
+  const OracleSegmenter old(w, {}, renderer);  // by_name: the silhouette for subsets
+  const std::vector<vcar::Index> target = w.gaussians_of(w.target_id), nb = w.gaussians_of(w.neighbour_id);
+  std::vector<vcar::Index> both = target;
+  both.insert(both.end(), nb.begin(), nb.end());
+  OracleSegmenter::FrameCasts casts;
+  CHECK(count(*honest.mask(cam, 0, true, casts, &nb)) == 0);
+  const vcar::Mask alone = *honest.mask(cam, 0, true, casts, &target);
+  const vcar::Mask with_nb = *honest.mask(cam, 0, true, casts, &both);
+  const vcar::Mask neighbour_shows = mask_of(RenderedLabels(w).label_image(cam, &both, renderer), w.neighbour_id);
+  const vcar::Mask sil = *old.mask(cam, 0, true);
+  CHECK(count(neighbour_shows) > 1000);
+  CHECK(overlap(with_nb, neighbour_shows) == 0);          // the foreign pieces stay out
+  CHECK(overlap(sil, neighbour_shows) > 1000);             // where the old oracle answered the silhouette
+  CHECK(count(with_nb) < count(alone) / 2);                // the neighbour hides much of the target here
+  CHECK(overlap(alone, silhouette_mask(w, cam, w.target_id)) > count(alone) * 8 / 10);  // 85%: the Gaussians' spread
+  // Half of the target dropped (its upper half kept): the mask lacks the rest.
+  const float cz = w.bounds(w.target_id).first.z();
+  std::vector<vcar::Index> upper;
+  for (vcar::Index i : target)
+    if (w.scene.mean[2][i] > cz) upper.push_back(i);
+  const vcar::Mask part = *honest.mask(cam, 0, true, casts, &upper);
+  CHECK(count(part) > count(alone) / 4);
+  CHECK(count(part) < count(alone) * 3 / 4);
+  CHECK(overlap(part, alone) > count(part) * 9 / 10);
+}
+
+TEST_CASE("rendered mode reads FrameSequence::drawn frame by frame") {
+  const auto& [w, cam] = gaussian_world();
+  vcar::cpu::TiledRenderer renderer;
+  OracleSegmenter oracle(w, rendered_params(), renderer);
+  const std::vector<vcar::Index> nb = w.gaussians_of(w.neighbour_id);
+  const std::vector<vcar::Camera> cams(4, cam);
+  vcar::FrameSequence f = frames_of(cams);
+  f.subset = true;
+  f.drawn = [&](std::size_t k) -> const std::vector<vcar::Index>* { return k % 2 ? &nb : nullptr; };
+  const auto masks = vcar::segment_all(oracle, f, {});
+  for (std::size_t k = 0; k < 4; ++k) {
+    REQUIRE(masks[k]);
+    INFO("frame " << k);
+    CHECK((count(*masks[k]) == 0) == (k % 2 == 1));  // odd frames draw only the neighbour
+  }
+  f.drawn = nullptr;  // a subset that does not say which Gaussians: refused
+  CHECK_THROWS_AS(vcar::segment_all(oracle, f, {}), vcar::Error);
+}
+
+TEST_CASE("oracle SAM failures: wrong object, part, leak, drift, each as it says; deterministic") {
+  const auto& [w, cam] = gaussian_world();
+  vcar::cpu::TiledRenderer renderer;
+  const IdImage labels = RenderedLabels(w).label_image(cam, nullptr, renderer);
+  const vcar::Mask base = mask_of(labels, w.target_id);
+  const std::vector<vcar::Camera> cams(12, cam);
+
+  OracleParams wrong = rendered_params();
+  wrong.sam.p_wrong = 1.0;
+  OracleSegmenter o_wrong(w, wrong, renderer);
+  std::set<int> chosen;
+  for (std::size_t k = 0; k < cams.size(); ++k) {
+    const vcar::Mask m = *o_wrong.mask(cam, k, false);
+    int found = -2;
+    for (int id : {-1, 0, 2, 3, 4, 5})
+      if (count(mask_of(labels, id)) > 0 && m.data == mask_of(labels, id).data) found = id;
+    CHECK(found >= 0);  // another object's mask, never the target's or nothing
+    chosen.insert(found);
+  }
+  CHECK(chosen.size() >= 2);  // not only the fixed neighbour
+
+  OracleParams part = rendered_params();
+  part.sam.p_part = 1.0;
+  OracleSegmenter o_part(w, part, renderer);
+  for (std::size_t k = 0; k < 4; ++k) {
+    const vcar::Mask m = *o_part.mask(cam, k, false);
+    CHECK(overlap(m, base) == count(m));  // a subset
+    CHECK(count(m) < count(base));        // strict
+    CHECK(count(m) > count(base) / 5);
+  }
+
+  OracleParams leak = rendered_params();
+  leak.sam.p_leak = 1.0;
+  leak.sam.leak_px = 5;
+  OracleSegmenter o_leak(w, leak, renderer);
+  const std::vector<float> d2 = squared_distance(base, true);
+  for (std::size_t k = 0; k < 4; ++k) {
+    const vcar::Mask m = *o_leak.mask(cam, k, false);
+    CHECK(overlap(m, base) == count(base));  // nothing of the target lost
+    std::set<int> added;
+    for (std::size_t i = 0; i < m.data.size(); ++i)
+      if (m.data[i] && !base.data[i]) {
+        added.insert(labels.id[i]);
+        CHECK(d2[i] <= 25.f);
+      }
+    CHECK(added.size() == 1);  // one other label, not the target, not nothing
+    CHECK(*added.begin() >= 0);
+    CHECK(*added.begin() != w.target_id);
+  }
+
+  // Drift through segment(): frame k of a sequence of one camera moves by about k drift_px.
+  OracleParams drift = rendered_params();
+  drift.sam.drift_px = 2.f;
+  OracleSegmenter o_drift(w, drift, renderer);
+  const auto seq = vcar::segment_all(o_drift, frames_of(cams), {});
+  CHECK(seq[0]->data == base.data);  // the prompted frame is exact
+  auto centre = [](const vcar::Mask& m) {
+    Eigen::Vector2d s(0, 0);
+    for (int y = 0; y < m.height; ++y)
+      for (int x = 0; x < m.width; ++x)
+        if (m(x, y)) s += Eigen::Vector2d(x, y);
+    return Eigen::Vector2d(s / static_cast<double>(count(m)));
+  };
+  for (std::size_t k = 1; k < 6; ++k)
+    CHECK((centre(*seq[k]) - centre(base)).norm() == Approx(2.0 * k).margin(1.0));  // whole pixels
+
+  // Determinism: the same seed gives the same masks; another seed other masks; the older
+  // models' draws do not move when a SAM failure is switched on (streams of their own).
+  OracleParams all = rendered_params();
+  all.sam = {0.3, 0.3, 0.5, 6, 0.5f};
+  all.p_drop = 0.3;
+  OracleSegmenter a(w, all, renderer), b(w, all, renderer);
+  all.seed = 2;
+  OracleSegmenter c(w, all, renderer);
+  const auto ma = vcar::segment_all(a, frames_of(cams), {}), mb = vcar::segment_all(b, frames_of(cams), {}),
+             mc = vcar::segment_all(c, frames_of(cams), {});
+  bool differs = false;
+  for (std::size_t k = 0; k < cams.size(); ++k) {
+    REQUIRE(ma[k].has_value() == mb[k].has_value());
+    if (ma[k]) CHECK(ma[k]->data == mb[k]->data);
+    differs = differs || ma[k].has_value() != mc[k].has_value() || (ma[k] && ma[k]->data != mc[k]->data);
+  }
+  CHECK(differs);
+  OracleParams drop_only = rendered_params();
+  drop_only.p_drop = 0.3;
+  OracleSegmenter d(w, drop_only, renderer);
+  const auto md = vcar::segment_all(d, frames_of(cams), {});
+  std::size_t dropped = 0;
+  for (std::size_t k = 0; k < cams.size(); ++k) {
+    CHECK(md[k].has_value() == ma[k].has_value());
+    dropped += !md[k];
+  }
+  CHECK(dropped > 0);
+}
+
+TEST_CASE("wrong object in visible mode: another object's visible mask") {
+  const World w = two_objects();
+  OracleParams p;
+  p.sam.p_wrong = 1.0;
+  const auto cam = front();
+  const auto m = OracleSegmenter(w, p).mask(cam, 0);
+  REQUIRE(m);
+  CHECK(m->data == visible_mask(w, cam, 2).data);  // the only other object in view
+  p.sam.p_wrong = 2.0;
+  CHECK_THROWS_AS(OracleSegmenter(w, p), vcar::Error);
 }
