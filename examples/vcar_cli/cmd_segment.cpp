@@ -72,6 +72,7 @@ int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
   // Inputs first (cheap checks before expensive reads), then the scene; the output folder last,
   // so a run that fails on its inputs leaves nothing behind.
   VcarParams params = make_params(o.preset, o.sets);
+  const synth::OracleParams oracle_p = oracle_params(o);  // --oracle-mode, --oracle-failure
   Prompt prompt;
   if (!o.points.empty()) parse_points(o.points, prompt);
   if (!o.box.empty()) prompt.box = parse_box(o.box);
@@ -190,7 +191,9 @@ int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
     }
   } else {
     inputs["oracle"] = o.oracle;
-    synth::OracleSegmenter seg(oracle_ds->world, {}, cpu_renderer);
+    inputs["oracle_mode"] = o.oracle_mode;
+    inputs["oracle_failures"] = o.oracle_failures;
+    synth::OracleSegmenter seg(oracle_ds->world, oracle_p, cpu_renderer);
     result = tallied(seg, nullptr, counts);
   }
   progress.done();

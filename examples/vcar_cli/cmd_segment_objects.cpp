@@ -87,6 +87,7 @@ FrameSequence one_frame(const FrameSequence& f, std::size_t k) {
   FrameSequence one;
   one.cameras = f.cameras.subspan(k, 1);
   one.subset = f.subset;
+  if (f.drawn) one.drawn = [&f, k](std::size_t) { return f.drawn(k); };
   one.image = [&f, k](std::size_t) { return f.image(k); };
   return one;
 }
@@ -101,6 +102,7 @@ int run_segment_objects(const SegmentOptions& o, const GlobalOptions& g) {
   if (!o.state_ply.empty())
     throw CliError(exit_usage, "--state-ply holds one selection; with --prompts use OUT/labels.ply", "--state-ply");
   const VcarParams params = make_params(o.preset, o.sets);
+  const synth::OracleParams oracle_p = oracle_params(o);  // --oracle-mode, --oracle-failure
 
   progress.message("reading cameras");
   const std::vector<Camera> cams = load_cameras(o.cameras, o.opengl_cameras);
@@ -159,20 +161,27 @@ int run_segment_objects(const SegmentOptions& o, const GlobalOptions& g) {
       external->segment_objects(f, std::move(asked), sink);
     };
   } else {
+    // The rendered mode's label copies of the scene: prepared once, shared by the objects.
+    const auto labels = oracle_p.mode == synth::OracleMode::rendered
+                            ? std::make_shared<const synth::RenderedLabels>(oracle_ds->world) : nullptr;
     for (const ObjectPrompt& ob : objects) {
-      synth::OracleParams op;
+      synth::OracleParams op = oracle_p;
       op.target_id = ob.object_id;
-      oracles.emplace_back(oracle_ds->world, op, cpu_renderer);
+      oracles.emplace_back(oracle_ds->world, op, cpu_renderer, labels);
     }
     // Each object's frames numbered from its own first (the oracle's failure draws depend on the
-    // frame number): the same answers as in a single run. One ray cast per frame for the objects
-    // that see it whole (the coarse round).
+    // frame number): the same answers as in a single run. One ray cast (or one set of label
+    // renders) per frame for the objects that see it whole (the coarse round). In the fine
+    // round each frame draws its own object's G_coarse (FrameSequence::drawn).
     source = [&](const FrameSequence& f, const std::vector<ObjectRequest>& req, const ObjectMaskSink& sink) {
       for (std::size_t k = 0; k < f.size(); ++k) {
         synth::OracleSegmenter::FrameCasts casts;
+        const std::vector<Index>* drawn = f.drawn ? f.drawn(k) : nullptr;
+        const bool subset = f.drawn ? drawn != nullptr : f.subset;
         for (std::size_t q = 0; q < req.size(); ++q) {
           if (!req[q].covers(k)) continue;
-          const std::optional<Mask> m = oracles[req[q].object].mask(f.cameras[k], k - req[q].first_frame, f.subset, casts);
+          const std::optional<Mask> m =
+              oracles[req[q].object].mask(f.cameras[k], k - req[q].first_frame, subset, casts, drawn);
           sink(k, q, m ? &*m : nullptr);
         }
       }
@@ -283,6 +292,10 @@ int run_segment_objects(const SegmentOptions& o, const GlobalOptions& g) {
   nlohmann::json inputs = {{"scene", o.scene}, {"cameras", o.cameras}, {"images", o.images}, {"prompts", o.prompts},
                            {"preset", o.preset}, {"set", o.sets}, {"views", cams.size()}, {"opengl_cameras", o.opengl_cameras},
                            {"masks", o.masks}, {"segmenter_cmd", o.segmenter_cmd}, {"oracle", o.oracle}};
+  if (!o.oracle.empty()) {
+    inputs["oracle_mode"] = o.oracle_mode;
+    inputs["oracle_failures"] = o.oracle_failures;
+  }
   write_json(out.path() / "report.json",
              {{"inputs", inputs}, {"parameters", params_json(params)}, {"objects", rep_objects},
               {"conflicts", result.conflicts}, {"segmenter_calls", result.segmenter_calls}, {"counts", {{"scene", scene.size()}, {"selected", union_idx.size()}, {"removed", rest.size()}}},

@@ -24,6 +24,8 @@ struct SegmentOptions {
   std::string state_ply;          // also write the whole scene with SuperSplat's state flags
   bool opengl_cameras = false;    // the camera file's axes are OpenGL's (x right, y up, z back)
   std::string prompts;            // several objects: a JSON list of prompts (cmd_segment_objects.cpp)
+  std::string oracle_mode = "by_name";       // --oracle: visible, silhouette, by_name or rendered
+  std::vector<std::string> oracle_failures;  // --oracle: failure models, key=value (scene_inputs.cpp)
 };
 int run_segment(const SegmentOptions& o, const GlobalOptions& g);
 int run_segment_objects(const SegmentOptions& o, const GlobalOptions& g);

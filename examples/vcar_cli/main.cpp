@@ -140,6 +140,13 @@ int main(int argc, char** argv) {
                                       "Built-in segmenter: grabcut (OpenCV's GrabCut on each frame, its box lifted from "
                                       "--box or --points; builds with OpenCV only)")
                         ->check(CLI::IsMember({"grabcut"}));
+  c_seg->add_option("--oracle-mode", seg.oracle_mode,
+                    "With --oracle: rendered (what each frame's render draws), by_name, visible or silhouette")
+      ->check(CLI::IsMember({"by_name", "visible", "silhouette", "rendered"}))->capture_default_str()->needs(o_oracle);
+  c_seg->add_option("--oracle-failure", seg.oracle_failures,
+                    "With --oracle: a failure model, key=value (repeatable): p_wrong, p_part, p_leak, leak_px, "
+                    "drift_px, p_drop, p_swap, dilate_px, jitter_px, n_blobs, blob_radius_px, seed")
+      ->take_all()->allow_extra_args(false)->needs(o_oracle);
   o_masks->excludes(o_cmd)->excludes(o_oracle)->excludes(o_builtin);
   o_cmd->excludes(o_oracle)->excludes(o_builtin);
   o_oracle->excludes(o_builtin);

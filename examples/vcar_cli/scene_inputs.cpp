@@ -1,6 +1,13 @@
 #include "scene_inputs.hpp"
 
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <functional>
+#include <set>
 #include <unordered_map>
+#include <utility>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
@@ -53,6 +60,54 @@ OracleDataset load_oracle_dataset(const std::filesystem::path& dir) {
   if (!std::filesystem::is_regular_file(dir / "gt" / "scene.json"))
     throw CliError(exit_bad_input, "not a vcar synth dataset (no gt/scene.json)", dir.string());
   return {synth::load_world(dir)};
+}
+
+synth::OracleParams oracle_params(const SegmentOptions& o) {
+  using synth::OracleMode;
+  synth::OracleParams p;
+  if (o.oracle_mode == "rendered") p.mode = OracleMode::rendered;
+  else if (o.oracle_mode == "visible") p.mode = OracleMode::visible;
+  else if (o.oracle_mode == "silhouette") p.mode = OracleMode::silhouette;
+  else if (o.oracle_mode != "by_name")
+    throw CliError(exit_usage, "unknown mode '" + o.oracle_mode + "'; valid: by_name, visible, silhouette, rendered", "--oracle-mode");
+  // key -> (field setter); integers and probabilities are checked by OracleParams::validate.
+  const std::vector<std::pair<std::string, std::function<void(double)>>> keys = {
+      {"p_wrong", [&](double v) { p.sam.p_wrong = v; }},   {"p_part", [&](double v) { p.sam.p_part = v; }},
+      {"p_leak", [&](double v) { p.sam.p_leak = v; }},     {"leak_px", [&](double v) { p.sam.leak_px = static_cast<int>(v); }},
+      {"drift_px", [&](double v) { p.sam.drift_px = static_cast<float>(v); }},
+      {"p_drop", [&](double v) { p.p_drop = v; }},         {"p_swap", [&](double v) { p.p_swap = v; }},
+      {"dilate_px", [&](double v) { p.dilate_px = static_cast<int>(v); }},
+      {"jitter_px", [&](double v) { p.jitter_px = static_cast<int>(v); }},
+      {"n_blobs", [&](double v) { p.n_blobs = static_cast<int>(v); }},
+      {"blob_radius_px", [&](double v) { p.blob_radius_px = static_cast<float>(v); }},
+      {"seed", [&](double v) { p.seed = static_cast<std::uint64_t>(v); }}};
+  const std::set<std::string> whole = {"leak_px", "dilate_px", "jitter_px", "n_blobs", "seed"};
+  for (const std::string& kv : o.oracle_failures) {
+    const auto eq = kv.find('=');
+    const std::string key = kv.substr(0, eq), value = eq == std::string::npos ? "" : kv.substr(eq + 1);
+    auto it = std::find_if(keys.begin(), keys.end(), [&](const auto& k) { return k.first == key; });
+    if (it == keys.end()) {
+      std::string valid;
+      for (const auto& k : keys) valid += (valid.empty() ? "" : ", ") + k.first;
+      throw CliError(exit_usage, "unknown key '" + key + "' in '" + kv + "'; valid: " + valid, "--oracle-failure");
+    }
+    char* end = nullptr;
+    errno = 0;
+    const double v = std::strtod(value.c_str(), &end);
+    const bool integral = whole.count(key) > 0;
+    if (value.empty() || *end != '\0' || errno != 0 || !std::isfinite(v) || (integral && (v != std::floor(v) || std::abs(v) > 1e9)) ||
+        (key == "seed" && v < 0))
+      throw CliError(exit_usage, "expected key=" + std::string(integral ? "INTEGER" : "NUMBER") + ", got '" + kv + "'",
+                     "--oracle-failure");
+    it->second(v);
+  }
+  try {
+    p.validate();
+  } catch (const Error& e) {  // "OracleParams.p_leak: must be in [0, 1]" -> "--oracle-failure: p_leak: must be ..."
+    const std::string what = e.what(), prefix = "OracleParams.";
+    throw CliError(exit_usage, what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what, "--oracle-failure");
+  }
+  return p;
 }
 
 void open_segment_sources(const SegmentOptions& o, const std::vector<Camera>& cams, ProgressLine& progress,

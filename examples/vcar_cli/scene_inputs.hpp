@@ -10,6 +10,7 @@
 #include "vcar/core/gaussian_scene.hpp"
 #include "vcar/io/external_segmenter.hpp"
 #include "vcar/io/mask_folder_segmenter.hpp"
+#include "vcar/synth/oracle_segmenter.hpp"
 #include "vcar/synth/world.hpp"
 
 namespace vcar::cli {
@@ -28,6 +29,10 @@ struct OracleDataset {
 OracleDataset load_oracle_dataset(const std::filesystem::path& dir);
 
 struct SegmentOptions;
+// The oracle's parameters from --oracle-mode and --oracle-failure key=value (keys: the fields of
+// synth::OracleParams and synth::SamFailures, docs/cli.md); a bad key or value is a usage error.
+synth::OracleParams oracle_params(const SegmentOptions& o);
+
 class ProgressLine;
 // What both segment commands open before segmenting, in the order that fails fastest: the
 // external segmenter (--segmenter-cmd; its program checked before any frame is rendered), the
