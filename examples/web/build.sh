@@ -19,7 +19,7 @@ emcmake cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$build" -j "${JOBS:-2}"
 
 rm -rf dist
-mkdir -p dist/vendor/three/addons/controls dist/vendor/three/addons/postprocessing dist/vendor/spark
+mkdir -p dist/vendor/three/addons/controls dist/vendor/three/addons/postprocessing dist/vendor/spark dist/vendor/fzstd
 cp web/index.html web/app.js web/worker.js web/style.css dist/
 cp "$build/vcar.js" dist/
 cp node_modules/three/build/three.module.js node_modules/three/build/three.core.js dist/vendor/three/
@@ -27,4 +27,6 @@ cp node_modules/three/examples/jsm/controls/OrbitControls.js dist/vendor/three/a
 cp node_modules/three/examples/jsm/postprocessing/Pass.js dist/vendor/three/addons/postprocessing/
 cp node_modules/three/LICENSE dist/vendor/three/LICENSE
 cp node_modules/@sparkjsdev/spark/dist/spark.module.js node_modules/@sparkjsdev/spark/LICENSE dist/vendor/spark/
+cp node_modules/fzstd/umd/index.js dist/vendor/fzstd/fzstd.js   # SPZ v4's zstd streams (src/compression_stubs.cpp)
+cp node_modules/fzstd/LICENSE dist/vendor/fzstd/LICENSE
 echo "build.sh: $(du -sh dist | cut -f1) in $here/dist"

@@ -2,12 +2,17 @@
 // trained scene (tests/data/train-1000.ply): loading, errors as messages, the JavaScript
 // segmenter hook (called per frame, reference first, masks checked for size), indices, scores,
 // log-scales and the PLY bytes. Exits non-zero on the first failed check.
-//   node test/node_api_test.cjs dist/vcar.js ../../tests/data/train-1000.ply [SCENE.splat SCENE.spz]
+//   node test/node_api_test.cjs dist/vcar.js ../../tests/data/train-1000.ply [SCENE.splat SCENE.spz
+//        [V4.spz V4-AS-V3.spz]]
 // The optional files (the same scene converted by `vcar_web_native --convert`) check the other
-// formats: .splat as is, SPZ inflated first (zlib here, DecompressionStream in the page).
+// formats: .splat as is, SPZ inflated first (zlib here, DecompressionStream in the page). With
+// an SPZ v4 file (zstd streams) and its natively converted gzip copy: v4 is read through fzstd
+// (dist/vendor/fzstd, as the worker loads it) and agrees with the copy; without fzstd it fails
+// with a message that names the missing decoder.
+//   V4.spz: e.g. ../shared/data/biker.spz (a current SPZ writer's output).
 const fs = require('fs');
 const path = require('path');
-const [vcarJs, scenePath, splatPath, spzPath] = process.argv.slice(2);
+const [vcarJs, scenePath, splatPath, spzPath, spz4Path, spz4As3Path] = process.argv.slice(2);
 const createVcar = require(path.resolve(vcarJs));
 let failed = 0;
 const check = (ok, what) => { if (!ok) { failed++; console.error('FAIL: ' + what); } };
@@ -30,6 +35,24 @@ const vertexCount = (b) => Number(/element vertex (\d+)/.exec(Buffer.from(b.suba
     const sameCam = o.defaultView(160, 120), plyCam = s.defaultView(160, 120);
     check(Math.abs(sameCam.t[2] - plyCam.t[2]) < 1e-2 * Math.abs(plyCam.t[2]) + 1e-3, 'SPZ positions agree with the PLY (default view)');
     o.delete();
+  }
+  if (spz4Path) {
+    const v4 = fs.readFileSync(spz4Path);
+    check(v4.readUInt32LE(0) === 0x5053474e && v4.readUInt32LE(4) === 4, 'the v4 file is SPZ version 4');
+    const o = new vcar.Session();
+    check(/no zstd decoder/.test(msg(() => o.loadScene(v4, 'scene.spz'))), 'SPZ v4 without fzstd names the missing decoder');
+    globalThis.fzstd = require(path.join(path.dirname(path.resolve(vcarJs)), 'vendor', 'fzstd', 'fzstd.js'));
+    const n4 = o.loadScene(v4, 'scene.spz');
+    const c = new vcar.Session();
+    const n3 = c.loadScene(require('zlib').gunzipSync(fs.readFileSync(spz4As3Path)), 'scene.spz');
+    check(n4 > 0 && n4 === n3 && o.format() === 'SPZ', `SPZ v4: ${n4} Gaussians, ${n3} in the native conversion`);
+    const a = o.defaultView(160, 120), b = c.defaultView(160, 120);
+    check(a.t.every((v, k) => Math.abs(v - b.t[k]) < 1e-4 * (1 + Math.abs(b.t[k]))), 'SPZ v4 positions agree with the native reading (default view)');
+    const corrupt = Buffer.from(v4);
+    corrupt.fill(0xab, corrupt.length - 4096);  // the last stream's tail
+    check(/SPZ v4 stream/.test(msg(() => o.loadScene(corrupt, 'bad.spz')) || ''), 'a corrupt v4 stream is an error naming the stream');
+    o.delete();
+    c.delete();
   }
   const cam = s.defaultView(160, 120);
   check(cam.width === 160 && cam.R.length === 9 && cam.t.length === 3, 'defaultView is a camera object');

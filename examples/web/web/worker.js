@@ -8,7 +8,7 @@
 //               {type: 'scene', n, format} | {type: 'cameras', names} | {type: 'view', camera}
 //               {type: 'result', indices, scores, logScales, diagnostics, seconds}
 //               {type: 'ply', kind, bytes} | {type: 'error', message, request}
-importScripts('vcar.js');
+importScripts('vcar.js', 'vendor/fzstd/fzstd.js');  // fzstd: SPZ v4's zstd streams (self.fzstd)
 
 let vcar = null, session = null;
 const ready = createVcar().then((m) => {
