@@ -6,6 +6,7 @@
 #   -DSTDOUT_JSON_KEYS=<key1|key2>               stdout is one JSON object with these keys
 #   -DSTDERR_HAS=<text|text>                     stderr contains each text
 #   -DPROMPT_FROM=<dataset dir>                  appends --prompt-view and --points from its prompt.json
+#   -DPROMPT_BOX_FROM=<dataset dir>              appends --prompt-view and --box from its prompt.json
 #   -DCLEAN=<dir>                                removed before the run
 #   -DPOSITIVE=<file:key.sub|...>                numeric JSON value (nested keys with '.') must be > 0
 #   -DAT_LEAST=<file:key.sub:min|...>            numeric JSON value >= min; file "-" is stdout
@@ -27,6 +28,17 @@ if(PROMPT_FROM)
   string(JSON u GET "${prompt}" points 0 0)
   string(JSON v GET "${prompt}" points 0 1)
   list(APPEND args --prompt-view "${view}" --points "${u},${v}")
+endif()
+if(PROMPT_BOX_FROM)
+  file(READ "${PROMPT_BOX_FROM}/prompt.json" prompt)
+  string(JSON view GET "${prompt}" reference_view)
+  set(box "")
+  foreach(k 0 1 2 3)
+    string(JSON c GET "${prompt}" box ${k})
+    list(APPEND box "${c}")
+  endforeach()
+  list(JOIN box "," box)
+  list(APPEND args --prompt-view "${view}" --box "${box}")
 endif()
 
 execute_process(COMMAND "${VCAR}" ${args}
