@@ -19,8 +19,8 @@ emcmake cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$build" -j "${JOBS:-2}"
 
 rm -rf dist
-mkdir -p dist/vendor/three/addons/controls dist/vendor/three/addons/postprocessing dist/vendor/spark dist/vendor/fzstd
-cp web/index.html web/app.js web/worker.js web/style.css dist/
+mkdir -p dist/vendor/three/addons/controls dist/vendor/three/addons/postprocessing dist/vendor/spark dist/vendor/fzstd dist/vendor/opencv
+cp web/index.html web/app.js web/worker.js web/grabcut.js web/style.css dist/
 cp "$build/vcar.js" dist/
 cp node_modules/three/build/three.module.js node_modules/three/build/three.core.js dist/vendor/three/
 cp node_modules/three/examples/jsm/controls/OrbitControls.js dist/vendor/three/addons/controls/
@@ -29,4 +29,5 @@ cp node_modules/three/LICENSE dist/vendor/three/LICENSE
 cp node_modules/@sparkjsdev/spark/dist/spark.module.js node_modules/@sparkjsdev/spark/LICENSE dist/vendor/spark/
 cp node_modules/fzstd/umd/index.js dist/vendor/fzstd/fzstd.js   # SPZ v4's zstd streams (src/compression_stubs.cpp)
 cp node_modules/fzstd/LICENSE dist/vendor/fzstd/LICENSE
+cp node_modules/@techstark/opencv-js/dist/opencv.js node_modules/@techstark/opencv-js/LICENSE dist/vendor/opencv/   # GrabCut (web/grabcut.js)
 echo "build.sh: $(du -sh dist | cut -f1) in $here/dist"

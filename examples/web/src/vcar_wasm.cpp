@@ -78,6 +78,11 @@ public:
       if (!options["orbitViews"].isUndefined()) opt.orbit_views = options["orbitViews"].as<int>();
       if (!options["colourTol"].isUndefined()) opt.grow.colour_tol = options["colourTol"].as<float>();
       if (!options["depthStep"].isUndefined()) opt.grow.depth_step = options["depthStep"].as<float>();
+      if (!options["box"].isUndefined() && !options["box"].isNull()) {
+        const std::vector<float> b = emscripten::convertJSArrayToNumberVector<float>(options["box"]);
+        if (b.size() != 4) throw vcar::Error("must be [x0, y0, x1, y1]", "options.box");
+        opt.box = Eigen::Vector4f(b[0], b[1], b[2], b[3]);
+      }
     }
     vcar::ProgressCallback cb;
     if (progress.typeOf().as<std::string>() == "function")
@@ -91,22 +96,36 @@ public:
         return !(r.isFalse());
       };
     // The JavaScript segmenter hook (docs/web.md): options.segmenter(frame) -> Uint8Array | null,
-    // frame = {index, camera, width, height, rgb (Uint8Array, w*h*3), click: [u, v], fine}
-    // (fine: the fine round, whose frames render the coarse selection only).
+    // frame = {index, camera, width, height, rgb (Uint8Array, w*h*3), click: [u, v] | null,
+    // box: [x0, y0, x1, y1] | null, fine} (fine: the fine round, whose frames render the coarse
+    // selection only; box: the prompt's box in this frame, lifted from the reference view).
+    // u or v NaN: no click (options.box is the prompt).
     vcar::web::FrameMaskFn custom;
     if (options.typeOf().as<std::string>() == "object" && options["segmenter"].typeOf().as<std::string>() == "function") {
       const val fn = options["segmenter"];
-      custom = [fn](std::size_t k, const vcar::Camera& cam, const vcar::ImageRGB8& rgb, const vcar::Prompt& p, bool subset) -> std::optional<vcar::Mask> {
+      custom = [fn](std::size_t k, const vcar::Camera& cam, const vcar::ImageRGB8& rgb, const vcar::Prompt& p, bool subset,
+                    const vcar::web::FrameBox& box) -> std::optional<vcar::Mask> {
         val f = val::object();
         f.set("index", static_cast<int>(k));
         f.set("camera", camera_to_js(cam));
         f.set("width", cam.width);
         f.set("height", cam.height);
         f.set("rgb", typed_copy(rgb.data));
-        val click = val::array();
-        click.call<void>("push", p.points.front()[0]);
-        click.call<void>("push", p.points.front()[1]);
-        f.set("click", click);
+        if (!p.points.empty()) {
+          val click = val::array();
+          click.call<void>("push", p.points.front()[0]);
+          click.call<void>("push", p.points.front()[1]);
+          f.set("click", click);
+        } else {
+          f.set("click", val::null());
+        }
+        if (box) {
+          val b = val::array();
+          for (int c = 0; c < 4; ++c) b.call<void>("push", (*box)[c]);
+          f.set("box", b);
+        } else {
+          f.set("box", val::null());
+        }
         f.set("fine", subset);
         const val m = fn(f);
         if (m.isNull() || m.isUndefined()) return std::nullopt;

@@ -1,12 +1,16 @@
 // The browser flow run natively: the same Session, segmenter and parameters as the WebAssembly
 // build, for the browser test (same selection?) and the browser-vs-native benchmark.
-//   vcar_web_native --scene FILE [--cameras FILE] [--view NAME] --click U,V [--max-side N]
-//                   [--orbit-views N] [--out result.json]
+//   vcar_web_native --scene FILE [--cameras FILE] [--view NAME] (--click U,V | --box X0,Y0,X1,Y1 | both)
+//                   [--segmenter region|grabcut] [--max-side N] [--orbit-views N] [--out result.json]
+// --segmenter grabcut (where OpenCV is found): vcar::opencv::grabcut on each frame's box, what
+// the page's grabcut.js does with OpenCV's WebAssembly build; region (the default here): vcar's
+// colour + depth region growing, as the page's fallback.
 //   vcar_web_native --convert IN OUT      (any scene format -> .ply / .splat / .spz by OUT's
 //                                          extension: inputs for the browser format tests)
 // Prints (and writes to --out) {"selected": n, "seconds": t, "indices": [...]}: the page's
 // #vcar-result format; seconds covers vcar::segment only, as in the page.
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -15,6 +19,9 @@
 #include <string>
 
 #include "web_flow.hpp"
+#ifdef VCAR_WEB_NATIVE_HAS_OPENCV
+#include "vcar/opencv/grabcut_segmenter.hpp"
+#endif
 
 namespace {
 std::vector<std::uint8_t> slurp(const std::string& p) {
@@ -25,7 +32,7 @@ std::vector<std::uint8_t> slurp(const std::string& p) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string scene, cameras, view, click, out;
+  std::string scene, cameras, view, click, box, segmenter = "region", out;
   vcar::web::SegmentOptions opt;
   if (argc == 4 && std::string(argv[1]) == "--convert") {
     try {
@@ -46,13 +53,16 @@ int main(int argc, char** argv) {
     else if (a == "--cameras") cameras = next();
     else if (a == "--view") view = next();
     else if (a == "--click") click = next();
+    else if (a == "--box") box = next();
+    else if (a == "--segmenter") segmenter = next();
     else if (a == "--out") out = next();
     else if (a == "--max-side") opt.max_side = std::stoi(next());
     else if (a == "--orbit-views") opt.orbit_views = std::stoi(next());
     else { std::cerr << "unknown argument " << a << "\n"; return 2; }
   }
-  if (scene.empty() || click.empty()) {
-    std::cerr << "usage: vcar_web_native --scene FILE [--cameras FILE] [--view NAME] --click U,V [--out FILE]\n";
+  if (scene.empty() || (click.empty() && box.empty()) || (segmenter != "region" && segmenter != "grabcut")) {
+    std::cerr << "usage: vcar_web_native --scene FILE [--cameras FILE] [--view NAME] (--click U,V | --box X0,Y0,X1,Y1)"
+                 " [--segmenter region|grabcut] [--out FILE]\n";
     return 2;
   }
   try {
@@ -60,10 +70,32 @@ int main(int argc, char** argv) {
     s.load_scene(slurp(scene), scene);
     if (!cameras.empty()) s.load_cameras(slurp(cameras), cameras);
     const vcar::Camera ref = vcar::web::reference_view(s, view);
-    float u = 0, v = 0;
-    if (std::sscanf(click.c_str(), "%f,%f", &u, &v) != 2) throw vcar::Error("expected U,V", "--click " + click);
+    float u = NAN, v = NAN;
+    if (!click.empty() && std::sscanf(click.c_str(), "%f,%f", &u, &v) != 2) throw vcar::Error("expected U,V", "--click " + click);
+    if (!box.empty()) {
+      Eigen::Vector4f b;
+      if (std::sscanf(box.c_str(), "%f,%f,%f,%f", &b[0], &b[1], &b[2], &b[3]) != 4) throw vcar::Error("expected X0,Y0,X1,Y1", "--box " + box);
+      opt.box = b;
+    }
+    vcar::web::FrameMaskFn custom;
+    if (segmenter == "grabcut") {
+#ifdef VCAR_WEB_NATIVE_HAS_OPENCV
+      custom = [](std::size_t k, const vcar::Camera& cam, const vcar::ImageRGB8& rgb, const vcar::Prompt& p, bool,
+                  const vcar::web::FrameBox& b) -> std::optional<vcar::Mask> {
+        if (!b) return std::nullopt;
+        const vcar::opencv::GrabCutParams params;
+        std::vector<vcar::opencv::GrabCutSeed> seeds;
+        if (k == 0)
+          for (const Eigen::Vector2f& q : p.points) seeds.push_back({q, true});
+        const float radius = params.seed_radius * std::hypot(static_cast<float>(cam.width), static_cast<float>(cam.height));
+        return vcar::opencv::grabcut(rgb, *b, params, seeds, radius, "GrabCut, frame " + std::to_string(k));
+      };
+#else
+      throw vcar::Error("this build has no OpenCV (Debian libopencv-dev)", "--segmenter grabcut");
+#endif
+    }
     const auto t0 = std::chrono::steady_clock::now();
-    const vcar::SegmentationResult& r = s.segment(ref, u, v, opt);
+    const vcar::SegmentationResult& r = s.segment(ref, u, v, opt, {}, custom);
     const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     std::ostringstream j;
     j << "{\"selected\": " << r.indices.size() << ", \"seconds\": " << secs << ", \"indices\": [";

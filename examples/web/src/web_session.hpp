@@ -25,6 +25,7 @@
 
 #include "region_grow_segmenter.hpp"
 #include "vcar/algo/pipeline.hpp"
+#include "vcar/algo/prompt_lift.hpp"
 #include "vcar/backends/cpu/tiled_renderer.hpp"
 #include "vcar/io/cameras.hpp"
 #include "vcar/io/ply.hpp"
@@ -34,14 +35,25 @@
 namespace vcar::web {
 
 // A mask source written by the host (the browser's JavaScript hook, docs/web.md): called once
-// per frame with the frame's camera and 8-bit render, and whether the frame renders a subset (the
-// fine round renders G_coarse only); returns the mask or nothing (no evidence).
-using FrameMaskFn = std::function<std::optional<Mask>(std::size_t frame, const Camera&, const ImageRGB8&, const Prompt&, bool subset)>;
+// per frame with the frame's camera and 8-bit render, whether the frame renders a subset (the
+// fine round renders G_coarse only) and the prompt's box in this frame: on the reference view
+// the user's box when there is one; elsewhere (and for a click) the prompt lifted to 3D on the
+// reference view and boxed in the frame (vcar::lift_prompt, algo/prompt_lift.hpp), nullopt when
+// the lift failed or the object is out of the frame. Returns the mask or nothing (no evidence).
+using FrameBox = std::optional<Eigen::Vector4f>;
+using FrameMaskFn =
+    std::function<std::optional<Mask>(std::size_t frame, const Camera&, const ImageRGB8&, const Prompt&, bool subset, const FrameBox& box)>;
 
 struct SegmentOptions {
   int max_side = 400;       // vcar renders the views at most this many pixels on the long side
   int orbit_views = 16;     // views around the clicked point when no cameras were loaded
   RegionGrowOptions grow{};
+  // A box prompt (x0, y0, x1, y1; pixels of the reference at its own size), with the click or
+  // instead of it (then the views circle the box's centre). Only the host's segmenter uses it:
+  // the region-growing one needs the click.
+  std::optional<Eigen::Vector4f> box;
+  float box_margin = 0.1f;    // lifted boxes padded by this share of their size (a box prompt)
+  float point_margin = 0.5f;  // the same for a click (it lifts part of the object)
 };
 
 class Session {
@@ -120,6 +132,7 @@ public:
   // view (it may be one of them); without cameras, `options.orbit_views` views circle the
   // clicked point at the reference's distance. Views are rendered at most max_side pixels wide.
   // With `custom`, the masks come from it instead of the region-growing segmenter.
+  // No click (u or v not finite): options.box alone is the prompt.
   const SegmentationResult& segment(const Camera& reference, float u, float v, const SegmentOptions& options = {},
                                     const ProgressCallback& progress = {}, const FrameMaskFn& custom = {}) {
     require_scene();
@@ -131,22 +144,42 @@ public:
     RegionGrowSegmenter<cpu::TiledRenderer> segmenter(renderer, options.grow);
     std::vector<Camera> views;
     Prompt prompt;
-    prompt.points = {Eigen::Vector2f(u * s, v * s)};
-    prompt.point_labels = {1};
+    if (std::isfinite(u) && std::isfinite(v)) {
+      prompt.points = {Eigen::Vector2f(u * s, v * s)};
+      prompt.point_labels = {1};
+    }
+    if (options.box) {
+      const Eigen::Vector4f& b = *options.box;
+      if (!b.allFinite() || !(b[2] > b[0] && b[3] > b[1])) throw Error("the box is empty or not finite (needs x0 < x1, y0 < y1)", "prompt");
+      prompt.box = b * s;
+    }
+    if (prompt.points.empty() && !prompt.box) throw Error("no prompt: give a click or a box", "prompt");
+    if (prompt.points.empty() && !custom) throw Error("the region-growing segmenter needs a click (a box needs another segmenter)", "prompt");
+    // Where the views circle (without cameras): the click, else the box's centre.
+    const Eigen::Vector2f anchor = !prompt.points.empty() ? prompt.points[0] : Eigen::Vector2f(0.5f * ((*prompt.box)[0] + (*prompt.box)[2]), 0.5f * ((*prompt.box)[1] + (*prompt.box)[3]));
     if (!cameras_.empty()) {
       views.push_back(ref);
       for (const Camera& c : cameras_)
         if (!(c.name == reference.name && c.R_w.isApprox(reference.R_w) && c.t_w.isApprox(reference.t_w)))
           views.push_back(scaled(c, std::min(1.f, static_cast<float>(options.max_side) / static_cast<float>(std::max(c.width, c.height)))));
     } else {
-      views = orbit_around_click(ref, prompt.points[0], renderer, options.orbit_views);
+      views = orbit_around_click(ref, anchor, renderer, options.orbit_views);
     }
     prompt.reference_view = 0;
     views_ = views;
     if (custom) {
+      // The prompt in 3D, boxed in each frame the host is asked about (training and sampled).
+      std::optional<LiftedPrompt> lifted;
+      try {
+        lifted = lift_prompt(scene_, ref, prompt, base);
+      } catch (const Error& e) {
+        std::fprintf(stderr, "vcar: warning: the prompt could not be lifted to 3D (%s): frames get no box\n", e.what());
+      }
+      const float margin = prompt.box ? options.box_margin : options.point_margin;
       auto host = make_streaming_segmenter([&](const FrameSequence& f, const Prompt& p, const MaskSink& sink) {
         for (std::size_t k = 0; k < f.size(); ++k) {
-          const std::optional<Mask> m = custom(k, f.cameras[k], f.image(k), p, f.subset);
+          const FrameBox box = lifted ? lifted->box_for(f.cameras[k], margin) : k == 0 ? p.box : FrameBox{};
+          const std::optional<Mask> m = custom(k, f.cameras[k], f.image(k), p, f.subset, box);
           sink(k, m ? &*m : nullptr);
         }
       });

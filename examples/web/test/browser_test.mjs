@@ -3,7 +3,11 @@
 // native twin (vcar_web_native: the same Session, segmenter and parameters, built for x86-64).
 //
 //   node test/browser_test.mjs --native BUILD/vcar_web_native --scene tests/data/donut.ply \
-//        --click 200,240 [--cameras cams.json --view NAME] [--screenshots docs/figures] [--min-iou 0.98]
+//        --click 200,240 [--cameras cams.json --view NAME] [--segmenter grabcut|region]
+//        [--screenshots docs/figures] [--min-iou 0.98]
+// --segmenter (default region): the page's segmenter (URL segmenter=, and the select for the
+// canvas click) and the native twin's (grabcut: OpenCV's WebAssembly build in the page,
+// Debian's OpenCV natively).
 //
 // Checks: the page writes {"selected", "seconds", "indices"} into #vcar-result; the selection is
 // not empty and not the whole scene; its Jaccard overlap with the native selection is at least
@@ -30,6 +34,8 @@ const minIou = Number(args['min-iou'] ?? 0.98);
 const minClickIou = Number(args['min-click-iou'] ?? 0.7);
 const timeoutMs = Number(args.timeout ?? 300) * 1000;
 const chromium = args.chromium ?? '/usr/bin/chromium';
+const segmenter = args.segmenter ?? 'region';
+const maxSide = args['max-side'];  // the page's maxSide (URL) and the native --max-side: views rendered this small
 
 // A static server: dist/ at /, the inputs at /input/<name>.
 const inputs = { [path.basename(scene)]: scene };
@@ -61,6 +67,8 @@ try {
   let q = `scene=/input/${encodeURIComponent(path.basename(scene))}`;
   if (args.cameras) q += `&cameras=/input/${encodeURIComponent(path.basename(args.cameras))}`;
   if (args.view) q += `&view=${encodeURIComponent(args.view)}`;
+  q += `&segmenter=${segmenter}`;
+  const qSide = maxSide ? `&maxSide=${maxSide}` : '';
   const shots = args.screenshots ? path.resolve(args.screenshots) : null;
 
   if (shots) {  // before: the scene in the viewer, nothing selected
@@ -69,7 +77,7 @@ try {
     await new Promise((r) => setTimeout(r, 4000));
     await page.screenshot({ path: path.join(shots, 'web_before.png') });
   }
-  await page.goto(`${base}/index.html?${q}&click=${click}`);
+  await page.goto(`${base}/index.html?${q}${qSide}&click=${click}`);
   await page.waitForFunction(() => document.getElementById('vcar-result').textContent.length > 0, { timeout: timeoutMs, polling: 500 });
   const result = JSON.parse(await page.$eval('#vcar-result', (e) => e.textContent));
   if (result.error) throw new Error('page: ' + result.error + '\n' + logs.join('\n'));
@@ -80,17 +88,25 @@ try {
     await new Promise((r) => setTimeout(r, 3000));
     await page.screenshot({ path: path.join(shots, 'web_isolate.png') });
   }
+  // (--canvas-click off skips what follows down to the PLY checks: a second run of one flow.)
   // A click on the canvas at the same spot: the viewer's camera (three.js) becomes a vcar camera
   // (an extra, 17th view of the canvas' size), so the selection is not identical to the
   // unattended one, but a wrong axis or intrinsics conversion would land the click elsewhere.
+  const canvasClick = args['canvas-click'] !== 'off';
   const box = await page.$eval('#canvas', (c) => { const r = c.getBoundingClientRect(); return { x: r.left, y: r.top, w: r.width, h: r.height }; });
   const ref = await page.evaluate(() => Array.from(window.vcarPage.selection()));
   const [cu, cv] = click.split(',').map(Number);
   const refCam = await page.evaluate((v) => window.vcarPage.call({ type: 'view', name: v }), args.view ?? '');
-  await page.evaluate(() => { document.getElementById('status').textContent = ''; });
-  await page.mouse.click(box.x + cu * box.w / refCam.camera.width, box.y + cv * box.h / refCam.camera.height);
-  await page.waitForFunction(() => /^selected|^error/.test(document.getElementById('status').textContent), { timeout: timeoutMs, polling: 500 });
-  const clicked = await page.evaluate(() => Array.from(window.vcarPage.selection() || []));
+  let clicked = ref;
+  if (canvasClick) {
+    await page.evaluate((name) => {
+      document.getElementById('status').textContent = '';
+      document.getElementById('segmenter-select').value = name;
+    }, segmenter);
+    await page.mouse.click(box.x + cu * box.w / refCam.camera.width, box.y + cv * box.h / refCam.camera.height);
+    await page.waitForFunction(() => /^selected|^error/.test(document.getElementById('status').textContent), { timeout: timeoutMs, polling: 500 });
+    clicked = await page.evaluate(() => Array.from(window.vcarPage.selection() || []));
+  }
   const refSet = new Set(ref);
   let both = 0;
   for (const i of clicked) both += refSet.has(i);
@@ -114,7 +130,8 @@ try {
   }, kind);
   const obj = await header('object'), rem = await header('removed'), st = await header('state');
 
-  const nat = JSON.parse(execFileSync(native, ['--scene', scene, '--click', click,
+  const nat = JSON.parse(execFileSync(native, ['--scene', scene, '--click', click, '--segmenter', segmenter,
+    ...(maxSide ? ['--max-side', String(maxSide)] : []),
     ...(args.cameras ? ['--cameras', path.resolve(args.cameras)] : []), ...(args.view ? ['--view', args.view] : [])],
     { encoding: 'utf8', stdio: ['ignore', 'pipe', 'inherit'] }));
   const a = new Set(result.indices), b = new Set(nat.indices);
@@ -123,12 +140,12 @@ try {
   const iou = inter / (a.size + b.size - inter || 1);
   const total = obj.n + rem.n;
   Object.assign(out, {
-    scene: path.basename(scene), click, view: args.view ?? null, gaussians: total,
+    scene: path.basename(scene), click, view: args.view ?? null, segmenter, gaussians: total,
     browser_selected: result.selected, native_selected: nat.selected, identical: inter === a.size && a.size === b.size,
     jaccard: Number(iou.toFixed(5)), browser_seconds: Number(result.seconds.toFixed(3)),
     native_seconds: Number(nat.seconds.toFixed(3)), ratio: Number((result.seconds / nat.seconds).toFixed(2)),
     simd: result.simd, ply: { object: obj.n, removed: rem.n, state_n: st.n, state_selected: st.state },
-    canvas_click: { selected: clicked.length, jaccard_vs_unattended: Number(clickIou.toFixed(4)) },
+    canvas_click: canvasClick ? { selected: clicked.length, jaccard_vs_unattended: Number(clickIou.toFixed(4)) } : null,
   });
   if (!(result.selected > 0 && result.selected < total)) fail(`selection of ${result.selected} of ${total} Gaussians`);
   if (result.indices.length !== result.selected) fail('indices and selected disagree');

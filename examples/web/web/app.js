@@ -1,6 +1,8 @@
-// vcar's web page: a Spark (three.js) splat viewer, vcar in a Web Worker, click to select.
-// Unattended contract (docs/web.md): index.html?scene=URL&cameras=URL&view=NAME&click=u,v runs
-// the whole flow and writes {"selected": n, "seconds": t, "indices": [...]} into #vcar-result.
+// vcar's web page: a Spark (three.js) splat viewer, vcar in a Web Worker, click (or shift-drag a
+// box) to select. Unattended contract (docs/web.md):
+// index.html?scene=URL&cameras=URL&view=NAME&click=u,v&box=x0,y0,x1,y1&segmenter=grabcut|region
+// (click, box or both) runs the whole flow and writes {"selected": n, "seconds": t, "indices":
+// [...]} into #vcar-result.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { SparkRenderer, SplatMesh } from '@sparkjsdev/spark';
@@ -155,12 +157,25 @@ async function loadCameras(bytes, name) {
 }
 async function referenceView(name) { return (await call({ type: 'view', name })).camera; }
 
+// u, v: the click (NaN: none); options.box: [x0, y0, x1, y1] (pixels of cam), with or instead of
+// the click; options.segmenterName: the page's choice unless given.
 async function segment(cam, u, v, options = {}) {
-  const marker = $('marker');
   const rect = canvas.getBoundingClientRect(), vrect = $('viewer').getBoundingClientRect();
-  marker.style.left = (rect.left - vrect.left + u * rect.width / cam.width) + 'px';
-  marker.style.top = (rect.top - vrect.top + v * rect.height / cam.height) + 'px';
-  marker.hidden = false;
+  const sx = rect.width / cam.width, sy = rect.height / cam.height;
+  const marker = $('marker');
+  marker.hidden = !(Number.isFinite(u) && Number.isFinite(v));
+  if (!marker.hidden) {
+    marker.style.left = (rect.left - vrect.left + u * sx) + 'px';
+    marker.style.top = (rect.top - vrect.top + v * sy) + 'px';
+  }
+  const frame = $('box');
+  frame.hidden = !options.box;
+  if (options.box) {
+    const [x0, y0, x1, y1] = options.box;
+    Object.assign(frame.style, { left: (rect.left - vrect.left + x0 * sx) + 'px', top: (rect.top - vrect.top + y0 * sy) + 'px',
+                                 width: ((x1 - x0) * sx) + 'px', height: ((y1 - y0) * sy) + 'px' });
+  }
+  options = { segmenterName: $('segmenter-select').value, ...options };
   $('progress').value = 0;
   const r = await call({ type: 'segment', camera: cam, u, v, options });
   selection = r.indices;
@@ -209,12 +224,35 @@ $('view-select').onchange = async () => {
   try { setViewerCamera(await referenceView($('view-select').value)); } catch (err) { status('error: ' + err.message); }
 };
 
-// Click (not drag) on the canvas: segment from the viewer's current camera.
-let down = null;
-canvas.addEventListener('pointerdown', (e) => { down = [e.offsetX, e.offsetY]; });
+// Click (not drag) on the canvas, or shift-drag a box: segment from the viewer's current camera.
+let down = null, boxing = false;
+canvas.addEventListener('pointerdown', (e) => {
+  down = [e.offsetX, e.offsetY];
+  boxing = e.shiftKey && !!camera;
+  if (boxing) { controls.enabled = false; canvas.setPointerCapture(e.pointerId); }
+}, { capture: true });
+canvas.addEventListener('pointermove', (e) => {
+  if (!boxing || !down) return;
+  const rect = canvas.getBoundingClientRect(), vrect = $('viewer').getBoundingClientRect(), f = $('box');
+  f.hidden = false;
+  Object.assign(f.style, { left: (rect.left - vrect.left + Math.min(down[0], e.offsetX)) + 'px',
+                           top: (rect.top - vrect.top + Math.min(down[1], e.offsetY)) + 'px',
+                           width: Math.abs(e.offsetX - down[0]) + 'px', height: Math.abs(e.offsetY - down[1]) + 'px' });
+});
 canvas.addEventListener('pointerup', async (e) => {
-  if (!down || !camera || Math.hypot(e.offsetX - down[0], e.offsetY - down[1]) > 4) return;
-  try { await segment(viewerCameraToVcar(), e.offsetX, e.offsetY); } catch (err) { status('error: ' + err.message); }
+  if (!down || !camera) return;
+  const [x, y] = down, wasBoxing = boxing;
+  down = null;
+  boxing = false;
+  if (controls) controls.enabled = true;
+  try {
+    if (wasBoxing && Math.abs(e.offsetX - x) > 4 && Math.abs(e.offsetY - y) > 4) {
+      const box = [Math.min(x, e.offsetX), Math.min(y, e.offsetY), Math.max(x, e.offsetX), Math.max(y, e.offsetY)];
+      await segment(viewerCameraToVcar(), NaN, NaN, { box });
+    } else if (!wasBoxing && Math.hypot(e.offsetX - x, e.offsetY - y) <= 4) {
+      await segment(viewerCameraToVcar(), e.offsetX, e.offsetY);
+    }
+  } catch (err) { status('error: ' + err.message); }
 });
 
 // For tests and scripting: the worker protocol (docs/web.md) and the current selection.
@@ -237,10 +275,12 @@ async function unattended() {
   const cam = await referenceView(params.get('view') || '');
   $('view-select').value = params.get('view') || '';
   setViewerCamera(cam);
-  const click = params.get('click');
-  if (!click) return;
-  const [u, v] = click.split(',').map(Number);
+  const click = params.get('click'), box = params.get('box');
+  if (!click && !box) return;
+  const [u, v] = click ? click.split(',').map(Number) : [NaN, NaN];
   const opts = {};
+  if (box) opts.box = box.split(',').map(Number);
+  if (params.get('segmenter')) opts.segmenterName = params.get('segmenter');
   if (params.get('maxSide')) opts.maxSide = Number(params.get('maxSide'));
   const r = await segment(cam, u, v, opts);
   await new Promise((res) => requestAnimationFrame(() => requestAnimationFrame(res)));  // the highlight is drawn

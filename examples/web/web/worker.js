@@ -4,6 +4,8 @@
 // Messages in:  {type: 'scene', bytes, name} | {type: 'cameras', bytes, name} | {type: 'view', name}
 //               {type: 'default-view', width, height}
 //               {type: 'segment', camera, u, v, options} | {type: 'ply', kind: 'object'|'removed'|'state'}
+//               (options: {segmenterName: 'grabcut' | 'region', box: [x0, y0, x1, y1], maxSide, ...};
+//               u, v NaN: no click, the box alone)
 // Messages out: {type: 'ready', simd} | {type: 'progress', stage, view, views, elapsed}
 //               {type: 'scene', n, format} | {type: 'cameras', names} | {type: 'view', camera}
 //               {type: 'result', indices, scores, logScales, diagnostics, seconds}
@@ -30,6 +32,28 @@ async function maybeGunzip(bytes) {
     return new Uint8Array(await new Response(stream).arrayBuffer());
   }
   return bytes;
+}
+
+// The page's segmenters (options.segmenterName): 'grabcut' (the default: OpenCV's GrabCut in
+// WebAssembly on each frame's box, grabcut.js; OpenCV is loaded on first use, ~11 MB) or 'region'
+// (vcar's colour + depth region growing from the click, in vcar.js). cv is handed over wrapped:
+// emscripten's module object is a thenable, which a promise would try to adopt.
+let openCV = null;
+function loadOpenCV() {
+  if (!openCV) {
+    openCV = new Promise((resolve, reject) => {
+      try {
+        importScripts('vendor/opencv/opencv.js', 'grabcut.js');
+      } catch (e) {
+        reject(new Error('OpenCV could not be loaded (vendor/opencv/opencv.js): ' + e.message));
+        return;
+      }
+      const cv = self.cv;
+      if (cv.Mat) resolve({ cv });
+      else cv.onRuntimeInitialized = () => resolve({ cv });
+    });
+  }
+  return openCV;
 }
 
 // Hook for a segmenter written in JavaScript (docs/web.md, "Bring your own SAM"): a script
@@ -64,8 +88,16 @@ onmessage = async (ev) => {
     } else if (q.type === 'segment') {
       const t0 = performance.now();
       const options = { ...(q.options || {}) };
-      const seg = hostSegmenter(options);
+      const name = options.segmenterName || 'grabcut';
+      delete options.segmenterName;
+      let seg = hostSegmenter(options);
       delete options.segmenterScript;
+      if (!seg && name === 'grabcut') {
+        const { cv } = await loadOpenCV();
+        seg = (frame) => self.vcarGrabCut(cv, frame);
+      } else if (!seg && name !== 'region') {
+        throw new Error(`unknown segmenter '${name}' (grabcut or region)`);
+      }
       if (seg) options.segmenter = seg;
       const diagnostics = session.segment(q.camera, q.u, q.v, options, (p) => {
         postMessage({ type: 'progress', ...p });
