@@ -28,15 +28,7 @@
 #include "vcar/algo/params.hpp"
 #include "vcar/algo/pipeline.hpp"
 #include "vcar/backends/cpu/tiled_renderer.hpp"
-#include "vcar/baselines/flashsplat.hpp"
-#include "vcar/baselines/gaussian_cut.hpp"
-#include "vcar/baselines/lbg.hpp"
-#include "vcar/baselines/ludvig.hpp"
-#include "vcar/baselines/naive_voting.hpp"
-#include "vcar/baselines/sagd.hpp"
 #include "vcar/core/parallel.hpp"
-#include "vcar/eval/aggregate.hpp"
-#include "vcar/eval/selection_metrics.hpp"
 #include "vcar/io/params_text.hpp"
 #include "vcar/io/ply.hpp"
 #include "vcar/synth/ground_truth.hpp"
@@ -44,6 +36,7 @@
 #include "vcar/synth/rigs.hpp"
 #include "vcar/synth/world.hpp"
 
+#include "evidence/methods.hpp"
 #include "evidence/peak_memory.hpp"
 #include "evidence/run_record.hpp"
 #include "evidence/filter_cluster.hpp"
@@ -138,7 +131,8 @@ struct Options {
   std::vector<std::string> targets;  // --targets a,b: keep only these targets
 };
 
-const std::vector<std::string> kPeers = {"naive", "sagd", "flashsplat", "gaussiancut", "ludvig", "lbg"};
+using evidence::is_360;
+using evidence::kPeers;
 const std::vector<std::string> kVariants = {"coarse", "sss", "abr", "full", "occlusion", "gapdir", "robust"};
 // The robust preset with one mechanism changed each (docs/robust.md ablation): off, or for the
 // edge band R1 and the second coarse threshold R9 (off in robust) on.
@@ -170,8 +164,6 @@ synth::OracleParams oracle_for(const Experiment& e) {
   else if (e.failure == "jitter") o.jitter_px = static_cast<int>(L);
   return o;
 }
-
-bool is_360(const std::string& rig) { return rig != "forward"; }
 
 // VCAR parameters per variant; preset nvos on forward-facing rigs, lerf on the others (Sec. 4.2).
 VcarParams vcar_params(const std::string& variant, const Experiment& e, const std::vector<std::string>& set) {
@@ -306,69 +298,29 @@ public:
         const VcarParams p = vcar_params(r.variant, e, opt_.set);
         r.preset = r.variant.rfind("robust", 0) == 0 ? "robust" : is_360(e.rig) ? "lerf" : "nvos";
         SegmentationResult res = segment(w.scene, rig.train, prompt, renderer_, segmenter, p);
-        r.time_s = since(t0);
-        const Diagnostics& d = res.diagnostics;
-        double seg = 0, ren = 0, vote = 0, vca = 0, abr = 0, fine = 0;
-        for (const auto& [name, s] : d.timings_s) {
-          if (name.find("_segment") != std::string::npos) seg += s;
-          else if (name.find("_render") != std::string::npos) ren += s;
-          else if (name.find("_voting") != std::string::npos) vote += s;
-          else if (name == "vca") vca += s;
-          else if (name == "abr") abr += s;
-          if (name == "fine_render" || name == "fine_voting") fine += s;
-        }
-        r.t_render = ren; r.t_segment = seg; r.t_vote = vote; r.t_vca = vca;
-        r.t_sss = d.sss_triggered ? fine : 0.0;
-        r.t_abr = abr;
-        r.t_method = r.time_s - seg;
-        r.frames_segmented = static_cast<int>(rig.train.size() + (d.sss_triggered ? rig.train.size() + d.sampled_cameras.size() : 0));
-        r.n_coarse = static_cast<long>(d.n_coarse); r.n_fine = static_cast<long>(d.n_fine);
-        r.abr_flagged = static_cast<long>(d.abr_flagged); r.abr_compressed = static_cast<long>(d.abr_compressed);
-        r.valid_cameras = static_cast<long>(d.valid_cameras); r.max_gap_deg = d.max_gap_deg;
-        r.sss_triggered = d.sss_triggered ? 1 : 0;
+        evidence::record_vcar(r, res.diagnostics, since(t0), rig.train.size());
         sel = std::move(res.indices);
         if (!sel.empty()) scales = std::move(res.log_scale);
       } else {
         r.preset = is_360(e.rig) ? "360" : "forward";
-        baselines::Result res;
-        if (r.method == "naive") {
-          baselines::NaiveVotingParams p;
-          if (e.failure == "tau") p.tau = static_cast<float>(e.level);
-          res = baselines::naive_voting(w.scene, rig.train, provider, p);
-        } else if (r.method == "sagd") {
-          baselines::SagdParams p;
-          if (e.failure == "tau") p.share_min = static_cast<float>(e.level);
-          baselines::SagdResult s = baselines::sagd(w.scene, rig.train, provider, p);
-          own_scene = s.scene_of(w.scene);
-          res = std::move(s);
-        } else if (r.method == "flashsplat") {
-          res = baselines::flashsplat(renderer_, w.scene, rig.train, provider);
-        } else if (r.method == "gaussiancut") {
-          baselines::GaussianCutParams p;
-          p.tau_w = is_360(e.rig) ? 0.3f : 0.9f;  // CONVENTIONS 8
-          if (e.failure == "tau") p.tau_w = static_cast<float>(e.level);
-          res = baselines::gaussian_cut(renderer_, w.scene, rig.train, provider, p);
-        } else if (r.method == "ludvig") {
-          baselines::LudvigParams p;
-          if (e.failure == "tau") p.threshold = static_cast<float>(e.level);
-          res = baselines::ludvig(renderer_, w.scene, rig.train, provider, p);
-        } else if (r.method == "lbg") {
-          res = baselines::lbg(w.scene, rig.train, provider);
-        } else if (r.method == "filtercluster") {  // splat-transform (evidence/filter_cluster.hpp)
-          res = evidence::filter_cluster(w, rig, renderer_, opt_.out / "work");
+        if (r.method == "filtercluster") {  // splat-transform (evidence/filter_cluster.hpp)
+          sel = evidence::filter_cluster(w, rig, renderer_, opt_.out / "work").selected;
         } else {
-          throw Error("unknown method '" + m + "'", "--methods");
+          const std::optional<float> tau = e.failure == "tau" ? std::optional<float>(static_cast<float>(e.level)) : std::nullopt;
+          evidence::PeerSelection res = evidence::run_peer(r.method, renderer_, w.scene, rig.train, provider, is_360(e.rig), tau);
+          sel = std::move(res.selected);
+          own_scene = std::move(res.own_scene);
         }
         r.t_method = since(t0);
         r.t_segment = t_masks;
         r.time_s = r.t_method + t_masks;
         r.frames_segmented = static_cast<int>(rig.train.size());
         if (r.method == "filtercluster") { r.t_segment = 0; r.time_s = r.t_method; r.frames_segmented = 0; }  // no masks
-        sel = std::move(res.selected);
       }
       r.peak_mib = evidence::peak_mib();
       r.peak_delta_mib = std::max(0.0, r.peak_mib - rss0);
-      evaluate(r, w, rig, gt, truth, sel, scales ? &*scales : nullptr, own_scene ? &*own_scene : nullptr);
+      evidence::evaluate(r, renderer_, w.scene, rig.eval, gt, truth, sel, scales ? &*scales : nullptr,
+                         own_scene ? &*own_scene : nullptr);
       csv_ << evidence::csv_row(r) << "\n";
       csv_.flush();
       rows_.push_back(r);
@@ -421,37 +373,6 @@ private:
       cache_key_ = key;
     }
     return cache_;
-  }
-
-  void evaluate(RunRecord& r, const synth::World& w, const synth::Rig& rig, const std::vector<Mask>& gt,
-                const std::vector<Index>& truth, const std::vector<Index>& sel, const LogScales* scales,
-                const GaussianScene* own) {
-    std::vector<eval::ViewMetrics> m05, m01;
-    for (std::size_t v = 0; v < rig.eval.size(); ++v) {
-      const Camera& cam = rig.eval[v];
-      ImageF alpha(cam.width, cam.height, 1);
-      if (!sel.empty()) {
-        RenderRequest q;
-        q.camera = &cam;
-        if (own) {
-          q.scene = own;
-        } else {
-          q.scene = &w.scene;
-          q.subset = &sel;
-          q.log_scale = scales;
-        }
-        alpha = renderer_.render(q).alpha;
-      }
-      m05.push_back(eval::evaluate_alpha(alpha, gt[v], eval::alpha_default, 0, cam.name));
-      m01.push_back(eval::evaluate_alpha(alpha, gt[v], eval::alpha_released, 0, cam.name));
-    }
-    const eval::ViewMetrics a = eval::mean(std::span<const eval::ViewMetrics>(m05));
-    const eval::ViewMetrics b = eval::mean(std::span<const eval::ViewMetrics>(m01));
-    r.miou = a.iou; r.macc = a.accuracy; r.boundary_iou = a.boundary_iou; r.boundary_f1 = a.boundary_f1;
-    r.trimap_iou = a.trimap_iou; r.miou_01 = b.iou; r.macc_01 = b.accuracy;
-    const eval::SelectionScores s = eval::selection_scores(sel, truth, w.scene.size());
-    r.f1_3d = s.f1; r.precision_3d = s.precision; r.recall_3d = s.recall;
-    r.selected = sel.size();
   }
 
   Options opt_;
