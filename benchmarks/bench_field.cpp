@@ -7,6 +7,8 @@
 //               [--targets a,b] [--rigs forward,orbit] [--segmenters grabcut,oracle,oracle-sam]
 //               [--methods vcar:paper,vcar:robust,naive,...] [--width W --height H]
 //               [--set key=value]... (VcarParams of the vcar:robust runs only: tuning the default)
+//               [--sam key=value]... (oracle-sam's levels instead of sam_levels': p_wrong, p_part,
+//               p_leak, leak_px, drift_px)
 //
 // Seeds: tuning seeds 1 and 2 (the default may be tuned on them), held-out reporting seeds
 // 11-15 (never tuned on); the CSV's `role` column says which a row is. --seeds all (default)
@@ -31,7 +33,7 @@
 //  - oracle: synth::OracleSegmenter in the honest rendered mode (what each frame's render draws:
 //    the whole scene in the coarse round, G_coarse in the fine round), no failure;
 //  - oracle-sam: the same with the SAM-like failures of synth/sam_failures.hpp at the moderate
-//    levels of kSam below.
+//    levels of sam_levels() below (--sam changes them).
 // Methods: vcar:paper (the paper's preset for the rig: nvos forward-facing, lerf 360), vcar:robust
 // (the library's default, VcarParams::robust()), and the peers (evidence/methods.hpp), which take
 // the coarse round's training masks.
@@ -105,13 +107,27 @@ const std::vector<int> kHeldoutSeeds = {11, 12, 13, 14, 15};
 // mask (the floor included) with p 0.05, half of the object with p 0.1, a touching background
 // piece within 8 px (at 640 px width; scaled with the width) with p 0.2, and a drift of 0.2 px
 // per frame along the sequence (5 px at the 25th frame).
-synth::SamFailures sam_levels(int width) {
+// --sam key=value (p_wrong, p_part, p_leak, leak_px, drift_px; pixels as given, not scaled)
+// replaces one level.
+synth::SamFailures sam_levels(int width, const std::vector<std::string>& overrides = {}) {
   synth::SamFailures s;
   s.p_wrong = 0.05;
   s.p_part = 0.1;
   s.p_leak = 0.2;
   s.leak_px = std::max(1, static_cast<int>(std::lround(8.0 * width / 640.0)));
   s.drift_px = 0.2f * static_cast<float>(width) / 640.f;
+  for (const std::string& kv : overrides) {
+    const auto eq = kv.find('=');
+    const std::string key = kv.substr(0, eq);
+    const double v = eq == std::string::npos ? NAN : std::stod(kv.substr(eq + 1));
+    if (key == "p_wrong") s.p_wrong = v;
+    else if (key == "p_part") s.p_part = v;
+    else if (key == "p_leak") s.p_leak = v;
+    else if (key == "leak_px") s.leak_px = static_cast<int>(v);
+    else if (key == "drift_px") s.drift_px = static_cast<float>(v);
+    else throw Error("unknown key in '" + kv + "' (p_wrong, p_part, p_leak, leak_px, drift_px)", "--sam");
+  }
+  s.validate();
   return s;
 }
 
@@ -294,6 +310,7 @@ struct Options {
   std::filesystem::path stage = VCAR_FIELD_STAGE_DEFAULT;
   std::string seeds = "all";
   std::vector<std::string> targets, rigs, segmenters, methods, set;
+  std::vector<std::string> sam;  // --sam key=value: oracle-sam's levels instead of sam_levels' defaults
   int width = 0, height = 0;
 };
 
@@ -454,7 +471,7 @@ public:
     j["seeds"] = seeds;
     j["tuning_seeds"] = kTuningSeeds;
     j["heldout_seeds"] = kHeldoutSeeds;
-    const synth::SamFailures s = sam_levels(width_);
+    const synth::SamFailures s = sam_levels(width_, opt_.sam);
     j["oracle_sam"] = {{"p_wrong", s.p_wrong}, {"p_part", s.p_part}, {"p_leak", s.p_leak},
                        {"leak_px", s.leak_px}, {"drift_px", s.drift_px}};
     j["skipped"] = skipped_;
@@ -518,7 +535,7 @@ private:
     synth::OracleParams p;
     p.mode = synth::OracleMode::rendered;
     p.seed = static_cast<std::uint64_t>(k.seed) * 7919u + 13u;
-    if (name == "oracle-sam") p.sam = sam_levels(width_);
+    if (name == "oracle-sam") p.sam = sam_levels(width_, opt_.sam);
     auto o = std::make_shared<synth::OracleSegmenter>(*k.w, p, renderer_, labels);
     return {[o](const FrameSequence& f, const Prompt& pr, const MaskSink& s) {
               // A real segmenter looks at each frame's render: the fine round's renders of
@@ -689,13 +706,15 @@ int main(int argc, char** argv) {
     else if (a == "--segmenters") o.segmenters = split(value());
     else if (a == "--methods") o.methods = split(value());
     else if (a == "--set") o.set.push_back(value());
+    else if (a == "--sam") o.sam.push_back(value());
     else if (a == "--width") o.width = std::stoi(value());
     else if (a == "--height") o.height = std::stoi(value());
     else {
       std::fprintf(stderr, "usage: %s [--quick] [--out DIR] [--stage FILE] [--seeds tuning|heldout|all|N,N,...] "
                            "[--targets a,b] [--rigs forward,orbit] [--segmenters grabcut,oracle,oracle-sam] "
                            "[--methods vcar:paper,vcar:robust,naive,sagd,flashsplat,gaussiancut,ludvig,lbg] "
-                           "[--width W --height H] [--set key=value]... (vcar:robust only)\n", argv[0]);
+                           "[--width W --height H] [--set key=value]... (vcar:robust only) "
+                           "[--sam key=value]... (oracle-sam's levels: p_wrong, p_part, p_leak, leak_px, drift_px)\n", argv[0]);
       return a == "--help" || a == "-h" ? 0 : 2;
     }
   }
