@@ -134,13 +134,11 @@ struct Options {
 using evidence::is_360;
 using evidence::kPeers;
 const std::vector<std::string> kVariants = {"coarse", "sss", "abr", "full", "occlusion", "gapdir", "robust"};
-// The robust preset with one mechanism changed each (docs/robust.md ablation): off, or for the
-// edge band R1 and the second coarse threshold R9 (off in robust) on.
-const std::vector<std::string> kRobustAblation = {"robust-band", "robust-noocc", "robust-nokeep",
-                                                  "robust-nolowpass", "robust-tau08", "robust-nofs",
+// The robust preset with one mechanism changed each (docs/robust.md ablation).
+const std::vector<std::string> kRobustAblation = {"robust-noocc", "robust-nolowpass", "robust-tau08", "robust-nofs",
                                                   "robust-noundershoot", "robust-nostrict", "robust-noabru",
-                                                  "robust-coarse2", "robust-nocoplanar", "robust-nogate",
-                                                  "robust-noovershoot", "robust-nogrow"};
+                                                  "robust-nocoplanar", "robust-nogate", "robust-noovershoot",
+                                                  "robust-nogrow"};
 
 std::vector<std::string> all_methods(bool variants = true) {
   std::vector<std::string> m = kPeers;
@@ -169,16 +167,13 @@ synth::OracleParams oracle_for(const Experiment& e) {
 VcarParams vcar_params(const std::string& variant, const Experiment& e, const std::vector<std::string>& set) {
   if (variant.rfind("robust", 0) == 0) {  // one preset for every rig: the library's default
     VcarParams p = VcarParams::robust();
-    if (variant == "robust-band") p.edge_band = 0.1f;
-    else if (variant == "robust-noocc") p.fine_occlusion = false;
-    else if (variant == "robust-nokeep") p.keep_unseen = false;
+    if (variant == "robust-noocc") p.fine_occlusion = false;
     else if (variant == "robust-nolowpass") p.abr_lowpass = false;
     else if (variant == "robust-tau08") p.tau_fine = 0.8f;
     else if (variant == "robust-nofs") p.foreshortening = false;
     else if (variant == "robust-noundershoot") p.undershoot_band = 0.f;
     else if (variant == "robust-nostrict") p.tau_strict = 0.f;
     else if (variant == "robust-noabru") p.abr_undershoot = false;
-    else if (variant == "robust-coarse2") p.tau_coarse_split = 0.3f;
     else if (variant == "robust-nocoplanar") p.coplanar_radius = 0.f;
     else if (variant == "robust-nogate") p.undershoot_gate = false;
     else if (variant == "robust-noovershoot") p.overshoot_min = 0.f;

@@ -24,9 +24,9 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RIGS = ["forward", "orbit", "sparse", "hemisphere"]
 PEERS = ["naive", "sagd", "flashsplat", "gaussiancut", "ludvig", "lbg"]
 VARIANTS = ["coarse", "sss", "abr", "full", "occlusion", "gapdir", "robust"]
-ROBUST_ABLATION = ["robust-band", "robust-noocc", "robust-nokeep", "robust-nolowpass", "robust-tau08", "robust-nofs",
-                   "robust-noundershoot", "robust-nostrict", "robust-noabru", "robust-coarse2", "robust-nocoplanar",
-                   "robust-nogate", "robust-noovershoot", "robust-nogrow"]
+ROBUST_ABLATION = ["robust-noocc", "robust-nolowpass", "robust-tau08", "robust-nofs", "robust-noundershoot",
+                   "robust-nostrict", "robust-noabru", "robust-nocoplanar", "robust-nogate", "robust-noovershoot",
+                   "robust-nogrow"]
 TARGETS = ["sphere", "torus", "cylinder", "box"]
 NUM = {"seed", "gaussians", "object_gaussians", "level", "width", "height", "n_train", "n_eval", "miou", "macc",
        "miou_01", "macc_01", "boundary_iou", "boundary_f1", "trimap_iou", "f1_3d", "precision_3d", "recall_3d",

@@ -466,11 +466,6 @@ std::string summary_text(const Diagnostics& d, const VcarParams& p, std::size_t 
                   static_cast<double>(d.tau_fine_applied));
     s += buf;
     if (d.undershoot_applied) s += ", undershoot band on (Eq. R6)";
-    if (p.tau_coarse_split > 0.f && d.tau_coarse_applied == p.tau_coarse_split) {  // Eq. R9 ran
-      std::snprintf(buf, sizeof buf, "; stages 2-3 again from the coarse vote at tau %.2f",
-                    static_cast<double>(d.tau_coarse_applied));
-      s += buf;
-    }
     if (d.abr_masks_widened > 0) {
       std::snprintf(buf, sizeof buf, ", %zu training masks widened by their undershoot for ABR", d.abr_masks_widened);
       s += buf;
@@ -557,7 +552,6 @@ nlohmann::json write_segmentation(const std::filesystem::path& out, const Gaussi
       {"sss_triggered", d.sss_triggered},
       {"tau_fine_applied", d.tau_fine_applied},
       {"undershoot_applied", d.undershoot_applied},
-      {"tau_coarse_applied", d.tau_coarse_applied},
       {"sphere", {{"center", {d.sphere.c.x(), d.sphere.c.y(), d.sphere.c.z()}}, {"radius", d.sphere.r},
                   {"inliers", d.sphere.inliers}}},
       {"sampled_views", d.sampled_cameras.size()},

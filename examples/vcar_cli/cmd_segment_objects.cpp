@@ -253,7 +253,6 @@ int run_segment_objects(const SegmentOptions& o, const GlobalOptions& g) {
                            {"counts", {{"coarse", d.n_coarse}, {"fine", d.n_fine}, {"final", d.n_final}, {"lost_to_others", result.lost[k]}}},
                            {"valid_cameras", d.valid_cameras}, {"max_gap_deg", d.max_gap_deg}, {"sss_triggered", d.sss_triggered},
                            {"tau_fine_applied", d.tau_fine_applied}, {"undershoot_applied", d.undershoot_applied},
-                           {"tau_coarse_applied", d.tau_coarse_applied},
                            {"sampled_views", d.sampled_cameras.size()},
                            {"abr", {{"flagged", d.abr_flagged}, {"compressed", d.abr_compressed}, {"retraced", d.abr_retraced}, {"masks_widened", d.abr_masks_widened}}},
                            {"coplanar_dropped", d.coplanar_dropped}, {"overshoot_eroded", d.overshoot_eroded},

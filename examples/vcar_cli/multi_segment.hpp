@@ -8,8 +8,7 @@
 // the segmenter in one batched call: each object's frames (renders of its own G_coarse) one
 // after the other, each object asked about its own frames only (ObjectRequest::first_frame,
 // frames), so an external segmenter starts once for them all (two calls per run, not one per
-// object and round). With Eq. R9 on (tau_coarse_split > 0, not a preset's default) an object
-// may need a second fine round; the fine rounds then go one object at a time.
+// object and round).
 // A Gaussian that two objects select goes to the one with the higher score (R_i of its last
 // vote; ties to the earlier object).
 //
@@ -59,20 +58,6 @@ struct MultiSegmentation {
 
 namespace detail_multi {
 
-// One object's segmenter for the rounds it has alone (the fine round).
-struct OneObject {
-  const MultiSegmentFn* fn;
-  ObjectRequest request;
-  void segment(const FrameSequence& frames, const Prompt& prompt, const MaskSink& sink) {
-    ObjectRequest r = request;
-    r.prompt = prompt;
-    r.prompt.reference_view = 0;  // run_round's frame 0 is the reference view
-    r.first_frame = 0;
-    r.frames = frames.size();
-    (*fn)(frames, {r}, [&](std::size_t k, std::size_t, const Mask* m) { sink(k, m); });
-  }
-};
-
 // One call of the segmenter; its failures other than vcar::Error become one naming the round.
 inline void ask(const MultiSegmentFn& segmenter, const FrameSequence& seq, const std::vector<ObjectRequest>& requests,
                 const ObjectMaskSink& sink, const char* round) {
@@ -108,7 +93,6 @@ void refine_objects(const GaussianScene& scene, const std::vector<Camera>& train
     Diagnostics& d = results[o].diagnostics;
     d.overshoot_eroded = votes[o]->overshoot_eroded();
     d.masks_grown = votes[o]->grown();
-    d.tau_coarse_applied = params.tau_coarse;
     std::vector<Index> selected;
     std::vector<float> scores;
     votes[o]->selected(params.tau_coarse, selected, scores);
@@ -348,23 +332,8 @@ MultiSegmentation segment_objects(const GaussianScene& scene, const std::vector<
   auto coarse_seen = [&](std::size_t o) {
     return votes[o]->occlusion() ? votes[o]->unoccluded_views() : std::span<const std::uint16_t>{};
   };
-  if (vcar::detail::may_retake_coarse(params)) {  // Eq. R9 on: one object at a time
-    for (std::size_t o = 0; o < K; ++o) {
-      detail_multi::OneObject one{&segmenter, ObjectRequest{o, objects[o].name, objects[o].prompt}};
-      const auto to = Clock::now();
-      out.objects[o].diagnostics.overshoot_eroded = votes[o]->overshoot_eroded();
-      out.objects[o].diagnostics.masks_grown = votes[o]->grown();
-      vcar::detail::refine_from_coarse(
-          scene, train_cameras, objects[o].prompt, renderer, one, params, progress, t_start, train_masks[o],
-          [&](float tau, std::vector<Index>& selected, std::vector<float>& scores) { votes[o]->selected(tau, selected, scores); },
-          out.objects[o], "fine round (" + objects[o].name + ")", coarse_seen(o));
-      votes[o].reset();  // its counters are not needed any more
-      out.objects[o].diagnostics.timings_s.emplace_back("total", seconds_since(to));
-    }
-  } else {
-    detail_multi::refine_objects(scene, train_cameras, objects, renderer, segmenter, params, progress, t_start,
-                                 votes, coarse_seen, train_masks, out.objects);
-  }
+  detail_multi::refine_objects(scene, train_cameras, objects, renderer, segmenter, params, progress, t_start,
+                               votes, coarse_seen, train_masks, out.objects);
   out.conflicts = resolve_conflicts(out.objects, scene.size(), out.lost);
   out.timings_s.emplace_back("total", seconds_since(t_start));
   return out;

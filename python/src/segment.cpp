@@ -321,7 +321,6 @@ py::dict result_dict(SegmentationResult&& r, const VcarParams& params) {
   d["sss_triggered"] = g.sss_triggered;
   d["tau_fine_applied"] = g.tau_fine_applied;
   d["undershoot_applied"] = g.undershoot_applied;
-  d["tau_coarse_applied"] = g.tau_coarse_applied;
   d["sampled_cameras"] = camera_list(g.sampled_cameras);
   py::dict sphere;
   sphere["center"] = vec3_array(g.sphere.c);

@@ -70,13 +70,6 @@ def test_oracle_identical_to_cli(cli_dataset, tmp_path, preset):
     fine_round = d["sss_triggered"] or preset == "reference_code"  # reference_code forces the round
     allowed = {"robust": [0.5, 0.85], "nvos": [0.8], "reference_code": [0.9]}[preset] if fine_round else [0.0]
     assert any(d["tau_fine_applied"] == pytest.approx(t) for t in allowed)
-    # Eq. R9: the coarse threshold of the selection the result comes from: tau_coarse, or (robust,
-    # after a split fine vote) tau_coarse_split.
-    assert d["tau_coarse_applied"] == pytest.approx(report["tau_coarse_applied"])
-    coarse_allowed = {"robust": [0.5, 0.3], "nvos": [0.5], "reference_code": [0.5]}[preset]
-    assert any(d["tau_coarse_applied"] == pytest.approx(t) for t in coarse_allowed)
-    if preset != "robust" or d["tau_fine_applied"] != pytest.approx(0.5):
-        assert d["tau_coarse_applied"] == pytest.approx(0.5)
     # Eq. R8: masks widened for ABR only by the robust preset, and only after a split fine vote.
     assert d["abr_masks_widened"] == report["abr"]["masks_widened"]
     if preset != "robust" or d["tau_fine_applied"] != pytest.approx(0.5):

@@ -71,17 +71,14 @@ TEST_CASE("validate names the parameter at fault") {
 
 TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond the paper; the paper presets none") {
   const auto r = VcarParams::robust();
-  CHECK(r.edge_band == 0.f);  // R1: superseded by R6-R7 (docs/robust.md), a switch only
   CHECK(r.fine_occlusion);
   CHECK(r.coarse_occlusion);
-  CHECK(r.keep_unseen);
   CHECK(r.foreshortening);
   CHECK(r.undershoot_band > 0.f);
   CHECK(r.undershoot_gate);  // R6c
   CHECK(r.tau_strict > r.tau_fine);
   CHECK(r.abr_lowpass);  // as the paper; R8 reads own footprints after a split vote
   CHECK(r.abr_undershoot);  // R8
-  CHECK(r.tau_coarse_split == 0.f);  // R9: a switch only since R12 (docs/robust.md)
   CHECK(r.overshoot_min > 0.f);      // R11
   CHECK(r.grow_max > 0.f);           // R12
   CHECK(r.kappa == 2.f);
@@ -89,21 +86,19 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
   CHECK_NOTHROW(r.validate());
   for (const auto& p : {VcarParams::nvos(), VcarParams::lerf(), VcarParams::reference_code()}) {
     CHECK_FALSE(p.robust_vote());
-    CHECK(p.edge_band == 0.f);
     CHECK_FALSE(p.foreshortening);
     CHECK(p.undershoot_band == 0.f);
     CHECK_FALSE(p.undershoot_gate);
     CHECK(p.tau_strict <= p.tau_fine);  // Eq. R7 off
     CHECK(p.abr_lowpass);
     CHECK_FALSE(p.abr_undershoot);
-    CHECK(p.tau_coarse_split == 0.f);  // Eq. R9 off
     CHECK(p.overshoot_min == 0.f);     // Eq. R11 off
     CHECK(p.grow_max == 0.f);          // Eq. R12 off
   }
   CHECK(VcarParams::reference_code().force_fine_round);
   CHECK_FALSE(VcarParams::nvos().force_fine_round);
   // By name, as the command line and the Python module use them.
-  CHECK(VcarParams::preset("robust").edge_band == r.edge_band);
+  CHECK(VcarParams::preset("robust").undershoot_band == r.undershoot_band);
   CHECK(VcarParams::preset("reference_code").tau_fine == 0.9f);
   CHECK_THROWS_WITH(VcarParams::preset("paper"), Catch::Contains("robust, nvos, lerf, reference_code"));
 }
@@ -112,8 +107,6 @@ TEST_CASE("validate: rho = 1 can never trigger the strict gate, and the robust p
   VcarParams p;
   p.rho = 1.f;            CHECK(where_of(p) == "rho");
   p = {}; p.rho = 0.99f;  CHECK(where_of(p) == "");
-  p = {}; p.edge_band = -0.1f; CHECK(where_of(p) == "edge_band");
-  p = {}; p.edge_band = 1.5f;  CHECK(where_of(p) == "edge_band");
   p = {}; p.kappa = -1.f;      CHECK(where_of(p) == "kappa");
   p = {}; p.undershoot_band = -1.f; CHECK(where_of(p) == "undershoot_band");
   p = {}; p.undershoot_band = NAN;  CHECK(where_of(p) == "undershoot_band");

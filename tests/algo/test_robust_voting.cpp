@@ -17,41 +17,37 @@ namespace {
 Mask square(int x0, int y0, int x1, int y1) { return square_mask(20, 20, x0, y0, x1, y1); }
 }  // namespace
 
-TEST_CASE("Eq. R1-R2 by hand: centre, band and outside pixels of a 10x10 square") {
-  // Pixels (col, row) at z = 1: u = 10 x + 10. Square [5, 15)^2, A = 100: w = max(1,
-  // round(0.2 sqrt(100 / pi))) = round(1.128) = 1.
-  const auto scene = scene_of({
-      {0.05f, 0.05f, 1},   // 0: pixel (10, 10): sure foreground
-      {-0.45f, 0.05f, 1},  // 1: pixel (5, 10): foreground, in the band (left edge)
-      {-0.55f, 0.05f, 1},  // 2: pixel (4, 10): background, in the band
-      {-0.85f, 0.05f, 1},  // 3: pixel (1, 10): sure background
-      {0.05f, 0.05f, -1},  // 4: behind the camera: invisible
-  });
-  const Camera c = cam20("a");
-  const Mask m = square(5, 5, 15, 15);
-  vcar::RobustVoting v(scene, 0.2f);
-  v.add_view(c, &m);
-  v.add_view(c, &m);
-  // Levels: 0 plain (Eq. 2), 1 unoccluded (no depth: = plain), 2 sure.
-  CHECK(v.visible(0, 2) == 2); CHECK(v.foreground(0, 2) == 2);
-  CHECK(v.visible(1, 0) == 2); CHECK(v.foreground(1, 0) == 2); CHECK(v.visible(1, 2) == 0);
-  CHECK(v.visible(2, 0) == 2); CHECK(v.foreground(2, 0) == 0); CHECK(v.visible(2, 2) == 0);
-  CHECK(v.visible(3, 2) == 2); CHECK(v.foreground(3, 2) == 0);
-  CHECK(v.visible(4, 0) == 0);
-  // Eq. R2: the sure level where it has views, else the centre ratio.
-  CHECK(v.ratio(0) == 1.f);
-  CHECK(v.ratio(1) == 1.f);  // band only: centre ratio F / V = 2 / 2
-  CHECK(v.ratio(2) == 0.f);
-  CHECK(v.ratio(3) == 0.f);
-  // keep_undecided keeps 1 and 2 (seen only in the band); keep_unseen keeps 4.
-  std::vector<Index> idx;
-  std::vector<float> sc;
-  v.selected(0.5f, false, false, idx, sc);
-  CHECK(idx == std::vector<Index>{0, 1});
-  v.selected(0.5f, true, false, idx, sc);
-  CHECK(idx == std::vector<Index>{0, 1, 2});
-  v.selected(0.5f, false, true, idx, sc);
-  CHECK(idx == std::vector<Index>{0, 1, 4});
+TEST_CASE("Eq. R2 by hand: one unoccluded background view shrinks a plain 0.9 once, to 0.6") {
+  // Gaussian 0 at pixel (10, 10), z = 2. Nine views: the mask covers it, but the render's surface
+  // lies at depth 1 (D / A = 1): occluded (Eq. R3), plain evidence only. One view: background, no
+  // render, so unoccluded. R^0 = 9 / 10; V^o = 1, F^o = 0: R^1 = (0 + 2 * 0.9) / (1 + 2) = 0.6. The
+  // sure level holds the same view (no R6 band), so it adds nothing: R = 0.6, not 0.4.
+  const auto scene = scene_of({{0.1f, 0.1f, 2.f}});
+  const Mask full = square(0, 0, 20, 20), empty = square(0, 0, 0, 0);
+  ImageF depth(20, 20, 1), alpha(20, 20, 1);
+  for (std::size_t p = 0; p < depth.data.size(); ++p) { alpha.data[p] = 1.f; depth.data[p] = 1.f; }
+  for (const float gamma : {0.f, 1.f}) {
+    CAPTURE(gamma);
+    vcar::RobustVoteOptions o;
+    o.gamma = gamma;
+    vcar::RobustVoting v(scene, o);
+    for (int j = 0; j < 9; ++j) v.add_view(cam20(("fg" + std::to_string(j)).c_str()), &full, &depth, &alpha, 0.05f);
+    v.add_view(cam20("bg"), &empty);
+    CHECK(v.visible(0) == 10); CHECK(v.foreground(0) == 9);
+    CHECK(v.visible(0, 1) == 1); CHECK(v.foreground(0, 1) == 0);
+    CHECK(v.visible(0, 2) == 1); CHECK(v.foreground(0, 2) == 0);
+    CHECK(v.ratio(0) == Approx(0.6f).margin(1e-6));
+    CHECK(v.ratio(0, false) == Approx(0.6f).margin(1e-6));
+    CHECK(v.kept(0, 0.5f));
+    CHECK_FALSE(v.kept(0, 0.7f));
+  }
+  // kappa 0: the unoccluded view decides alone.
+  vcar::RobustVoteOptions k0;
+  k0.kappa = 0.f;
+  vcar::RobustVoting v0(scene, k0);
+  for (int j = 0; j < 9; ++j) v0.add_view(cam20(("fg" + std::to_string(j)).c_str()), &full, &depth, &alpha, 0.05f);
+  v0.add_view(cam20("bg"), &empty);
+  CHECK(v0.ratio(0) == 0.f);
 }
 
 TEST_CASE("Eq. R3 by hand: a Gaussian behind the rendered surface is occluded, within tolerance it is not") {
@@ -67,7 +63,7 @@ TEST_CASE("Eq. R3 by hand: a Gaussian behind the rendered surface is occluded, w
   for (std::size_t p = 0; p < depth.data.size(); ++p) { alpha.data[p] = 0.8f; depth.data[p] = 0.8f; }  // D / A = 1
   alpha.data[14 * 20 + 14] = 0.4f;
   depth.data[14 * 20 + 14] = 0.1f;
-  vcar::RobustVoting v(scene, 0.f);
+  vcar::RobustVoting v(scene);
   v.add_view(c, &m, &depth, &alpha, 0.05f);
   CHECK(v.visible(0, 1) == 1);
   CHECK(v.visible(1, 0) == 1);
@@ -86,7 +82,7 @@ TEST_CASE("RobustVoting with every mechanism off equals VisibilityVoting (Eq. 1-
   const auto scene = scene_of(mus);
   std::vector<Index> cand;
   for (Index i = 0; i < 3000; i += 3) cand.push_back(i);
-  vcar::RobustVoting r(scene, cand, 0.f);
+  vcar::RobustVoting r(scene, cand);
   vcar::VisibilityVoting p(scene, cand);
   for (int j = 0; j < 12; ++j) {
     Camera c = Camera::look_at({2.f * std::cos(0.5f * j), 0.3f, 2.5f + 2.f * std::sin(0.5f * j)}, {0, 0, 2.5f},
@@ -104,13 +100,13 @@ TEST_CASE("RobustVoting with every mechanism off equals VisibilityVoting (Eq. 1-
   }
   std::vector<Index> idx;
   std::vector<float> sc;
-  r.selected(0.5f, false, false, idx, sc);
+  r.selected(0.5f, idx, sc);
   CHECK(idx == p.selected(0.5f));
 }
 
 TEST_CASE("RobustVoting rejects masks and depth images of the wrong size, naming the view") {
   const auto scene = scene_of({{0, 0, 1}});
-  vcar::RobustVoting v(scene, 0.1f);
+  vcar::RobustVoting v(scene);
   const Camera c = cam20("left");
   Mask bad(10, 20, 1);
   CHECK_THROWS_WITH(v.add_view(c, &bad), Catch::Contains("view 'left'"));
@@ -120,7 +116,7 @@ TEST_CASE("RobustVoting rejects masks and depth images of the wrong size, naming
   CHECK_THROWS_WITH(v.add_view(c, &m, &a, nullptr, 0.05f), Catch::Contains("alpha image"));
 }
 
-TEST_CASE("Eq. R5 in the vote: the unoccluded and sure levels sum omega of the views that count there (brute force)") {
+TEST_CASE("Eq. R5 in the vote: the unoccluded level sums omega of the views that count there (brute force)") {
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> U(-1.f, 1.f), S(-4.f, -1.f);
   const std::size_t n = 2000;
@@ -131,11 +127,10 @@ TEST_CASE("Eq. R5 in the vote: the unoccluded and sure levels sum omega of the v
   std::vector<Index> cand;
   for (Index i = 1; i < n; i += 2) cand.push_back(i);
   vcar::RobustVoteOptions o;
-  o.beta = 0.1f;
   o.foreshortening = true;
   vcar::RobustVoting w(scene, cand, o);
-  vcar::RobustVoting counts(scene, cand, 0.1f);  // the same views, unweighted: which level each view reached
-  std::vector<double> V1(cand.size()), F1(cand.size()), V2(cand.size()), F2(cand.size());
+  vcar::RobustVoting counts(scene, cand);  // the same views, unweighted: which level each view reached
+  std::vector<double> V1(cand.size()), F1(cand.size());
   for (int j = 0; j < 9; ++j) {
     Camera c = Camera::look_at({2.f * std::cos(0.7f * j), 0.5f * std::sin(1.3f * j), 2.5f + 2.f * std::sin(0.7f * j)},
                                {0, 0, 2.5f}, {0, -1, 0}, {37, 23, 30, 31, 18.5f, 11.5f}, "c" + std::to_string(j));
@@ -144,9 +139,8 @@ TEST_CASE("Eq. R5 in the vote: the unoccluded and sure levels sum omega of the v
       for (int x = 8 + j % 3; x < 29; ++x) m.data[static_cast<std::size_t>(y) * 37 + x] = 255;
     ImageF depth(37, 23, 1), alpha(37, 23, 1);
     for (std::size_t p = 0; p < depth.data.size(); ++p) { alpha.data[p] = 1.f; depth.data[p] = 2.f + 0.2f * static_cast<float>(p % 5); }
-    std::vector<std::array<std::uint16_t, 4>> before(cand.size());
-    for (std::size_t k = 0; k < cand.size(); ++k)
-      before[k] = {counts.visible(k, 1), counts.foreground(k, 1), counts.visible(k, 2), counts.foreground(k, 2)};
+    std::vector<std::array<std::uint16_t, 2>> before(cand.size());
+    for (std::size_t k = 0; k < cand.size(); ++k) before[k] = {counts.visible(k, 1), counts.foreground(k, 1)};
     w.add_view(c, &m, &depth, &alpha, 0.05f);
     counts.add_view(c, &m, &depth, &alpha, 0.05f);
     const Eigen::Vector3f C = c.position();
@@ -163,8 +157,6 @@ TEST_CASE("Eq. R5 in the vote: the unoccluded and sure levels sum omega of the v
       const double omega = (1.0 - phi) + phi * std::abs(nrm.dot(d));
       V1[k] += omega * (counts.visible(k, 1) - before[k][0]);
       F1[k] += omega * (counts.foreground(k, 1) - before[k][1]);
-      V2[k] += omega * (counts.visible(k, 2) - before[k][2]);
-      F2[k] += omega * (counts.foreground(k, 2) - before[k][3]);
     }
   }
   int partial = 0;
@@ -172,13 +164,11 @@ TEST_CASE("Eq. R5 in the vote: the unoccluded and sure levels sum omega of the v
     REQUIRE(w.visible(k, 1) == counts.visible(k, 1));  // the counters are unchanged by R5
     REQUIRE(w.weight(k, 1) == Approx(V1[k]).margin(1e-4));
     REQUIRE(w.weighted_foreground(k, 1) == Approx(F1[k]).margin(1e-4));
-    REQUIRE(w.weight(k, 2) == Approx(V2[k]).margin(1e-4));
-    REQUIRE(w.weighted_foreground(k, 2) == Approx(F2[k]).margin(1e-4));
-    // Eq. R2 on the weighted sums.
+    REQUIRE(w.weight(k, 2) == w.weight(k, 1));  // without R6 the sure level is the unoccluded one
+    // Eq. R2 on the weighted sums, once (the sure level adds nothing).
     const double R0 = static_cast<double>(w.foreground(k)) / std::max(1, static_cast<int>(w.visible(k)));
     const double R1 = (F1[k] + 2.0 * R0) / (V1[k] + 2.0);
-    const double R2 = (F2[k] + 2.0 * R1) / (V2[k] + 2.0);
-    REQUIRE(w.ratio(k) == Approx(R2).margin(1e-5));
+    REQUIRE(w.ratio(k) == Approx(R1).margin(1e-5));
     partial += V1[k] > 0 && V1[k] < w.visible(k, 1) - 1e-3;  // some weights below 1 were summed
   }
   CHECK(partial > 100);
@@ -199,12 +189,12 @@ TEST_CASE("Eq. R6 in the vote: background pixels within gamma e_j of an undersho
     for (int x = 5; x < 15; ++x) alpha.data[static_cast<std::size_t>(y) * 20 + x] = 1.f;
   vcar::RobustVoteOptions o;
   o.gamma = 1.f;
-  vcar::RobustVoting with(scene, o), without(scene, 0.f);
+  vcar::RobustVoting with(scene, o), without(scene);
   with.add_view(c, &m, nullptr, &alpha);
   without.add_view(c, &m, nullptr, &alpha);
   CHECK(with.last_undershoot_px() == 3.0);
   CHECK(without.visible(0, 2) == 1);  // sure background without R6
-  CHECK(with.visible(0, 2) == 0);     // within max(w, gamma e) = 3 px: unsure
+  CHECK(with.visible(0, 2) == 0);     // within gamma e = 3 px: unsure
   CHECK(with.visible(1, 2) == 1);     // 6 px out: still sure background
   CHECK(with.foreground(1, 2) == 0);
   CHECK(with.visible(2, 2) == 1);
@@ -213,7 +203,7 @@ TEST_CASE("Eq. R6 in the vote: background pixels within gamma e_j of an undersho
   vcar::RobustVoting no_render(scene, o);
   no_render.add_view(c, &m);
   CHECK(no_render.visible(0, 2) == 1);
-  // gamma 0.5: reach max(0, 1.5) px: pixel 6 is 2 px out: sure again.
+  // gamma 0.5: reach 1.5 px: pixel 6 is 2 px out: sure again.
   o.gamma = 0.5f;
   vcar::RobustVoting half(scene, o);
   half.add_view(c, &m, nullptr, &alpha);
@@ -221,9 +211,9 @@ TEST_CASE("Eq. R6 in the vote: background pixels within gamma e_j of an undersho
 }
 
 TEST_CASE("Eq. R6c in the vote: ratio(k, false) is the vote without R6, bit for bit (brute force)") {
-  // Random scenes, masks that undershoot the render by 0-4 px, and every combination of the
-  // band (R1) and foreshortening (R5): the vote with R6 read without it equals a vote that never
-  // had R6, for every candidate, every threshold and the undecided rule.
+  // Random scenes, masks that undershoot the render by 0-4 px, with and without foreshortening
+  // (R5): the vote with R6 read without it equals a vote that never had R6, for every candidate
+  // and every threshold.
   std::mt19937 rng(23);
   std::uniform_real_distribution<float> U(-1.f, 1.f);
   std::vector<Eigen::Vector3f> mus(2000);
@@ -233,10 +223,10 @@ TEST_CASE("Eq. R6c in the vote: ratio(k, false) is the vote without R6, bit for 
     scene.set(i, mus[i], {-3.f, -3.f, -6.f}, {1.f, U(rng), U(rng), U(rng)}, 0.f);
   std::vector<Index> cand;
   for (Index i = 0; i < 2000; i += 2) cand.push_back(i);
-  for (float beta : {0.f, 0.1f})
+  {
     for (bool fs : {false, true}) {
-      CAPTURE(beta, fs);
-      vcar::RobustVoteOptions with_r6{beta, 2.f, fs, 1.5f}, without_r6{beta, 2.f, fs, 0.f};
+      CAPTURE(fs);
+      vcar::RobustVoteOptions with_r6{2.f, fs, 1.5f}, without_r6{2.f, fs, 0.f};
       vcar::RobustVoting a(scene, cand, with_r6), b(scene, cand, without_r6);
       for (int j = 0; j < 10; ++j) {
         Camera c = Camera::look_at({2.f * std::cos(0.6f * j), 0.4f, 2.5f + 2.f * std::sin(0.6f * j)}, {0, 0, 2.5f},
@@ -260,23 +250,23 @@ TEST_CASE("Eq. R6c in the vote: ratio(k, false) is the vote without R6, bit for 
         differs += a.ratio(k) != b.ratio(k);
       }
       CHECK(differs > 0);  // R6 changed the vote, so the comparison above means something
-      for (float tau : {0.3f, 0.5f, 0.85f})
-        for (bool undecided : {false, true}) {
-          std::vector<Index> ia, ib;
-          std::vector<float> sa, sb;
-          a.selected(tau, undecided, true, ia, sa, false);
-          b.selected(tau, undecided, true, ib, sb);
-          CHECK(ia == ib);
-          CHECK(sa == sb);
-        }
+      for (float tau : {0.3f, 0.5f, 0.85f}) {
+        std::vector<Index> ia, ib;
+        std::vector<float> sa, sb;
+        a.selected(tau, ia, sa, false);
+        b.selected(tau, ib, sb);
+        CHECK(ia == ib);
+        CHECK(sa == sb);
+      }
     }
+  }
 }
 
 TEST_CASE("Eq. R6c by hand: ratio(k, false) reads the sure level without R6's widening") {
   // Gaussian 0 at pixel (6, 10). View a: the mask [8, 12)^2 undershoots the render [5, 15)^2 by
   // e = 3 px, so pixel (6, 10), 2 px out, is unsure with R6 (reach 3) and sure background
   // without it. View b: a mask over the whole image (no contour: e = 0), foreground.
-  // V = V^o = 2, F = F^o = 1: R^0 = R^1 = 1/2 (kappa 2). With R6: V^s = 1, F^s = 1,
+  // V = V^o = 2, F = F^o = 1: R^0 = R^1 = 1/2 (the same counts: not shrunk). With R6: V^s = 1, F^s = 1,
   // R^2 = (1 + 2 * 1/2) / (1 + 2) = 2/3. Without: V^s = 2, F^s = 1, R^2 = 1/2.
   const auto scene = scene_of({{-0.35f, 0.05f, 1}});
   const Mask ma = square(8, 8, 12, 12), mb = square(0, 0, 20, 20);
@@ -291,10 +281,10 @@ TEST_CASE("Eq. R6c by hand: ratio(k, false) reads the sure level without R6's wi
   CHECK(v.ratio(0) == Approx(2.f / 3.f));
   CHECK(v.ratio(0, false) == Approx(0.5f));
   // At tau 0.6 the Gaussian is kept with R6 and dropped without it.
-  CHECK(v.kept(0, 0.6f, false, false));
-  CHECK_FALSE(v.kept(0, 0.6f, false, false, false));
+  CHECK(v.kept(0, 0.6f));
+  CHECK_FALSE(v.kept(0, 0.6f, false));
   // gamma 0 (R6 off): both readings are the same vote.
-  vcar::RobustVoting off(scene, 0.f);
+  vcar::RobustVoting off(scene);
   off.add_view(cam20("a"), &ma, nullptr, &alpha);
   off.add_view(cam20("b"), &mb, nullptr, &alpha);
   CHECK(off.ratio(0) == off.ratio(0, false));

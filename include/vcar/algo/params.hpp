@@ -73,9 +73,6 @@ struct VcarParams {
   // again (tau_fine) even when SSS does not trigger (its force_round2). Off in the paper.
   bool force_fine_round = false;
   // --- Beyond the paper: the robust preset (docs/robust.md), each off in the paper presets --
-  // Eq. R1-R2: a mask's edge band of half-width w_j = max(1, round(edge_band sqrt(A_j / pi)))
-  // px is no evidence; 0 = off.
-  float edge_band = 0.f;
   // Eq. R3: a Gaussian behind the view's rendered surface, z > (depth / alpha)(p)
   // (1 + depth_tolerance) where alpha(p) >= 0.5, is occluded there (evidence of the lower
   // "plain" level only, Eq. R2). Fine round: renders of G_coarse; coarse round: of the scene.
@@ -83,15 +80,10 @@ struct VcarParams {
   bool coarse_occlusion = false;
   // Eq. R2: prior weight, in views, that ties each evidence level's ratio to the level below.
   float kappa = 2.f;
-  // Eq. R4: a fine-round candidate that no fine view sees keeps its coarse decision.
-  bool keep_unseen = false;
-  // Eq. R2: a Gaussian the coarse round sees unoccluded but only inside edge bands is passed on
-  // to the fine round (undecided) instead of being judged by its centre pixels.
-  bool keep_undecided = false;
   // Eq. R5: the unoccluded and sure levels weigh each view by how face-on it sees the Gaussian,
   // omega = (1 - phi) + phi |n . d| (n the normal of its smallest axis, phi its flatness).
   bool foreshortening = false;
-  // Eq. R6: in the fine round, background pixels within max(w_j, undershoot_band e_j) px of the
+  // Eq. R6: in the fine round, background pixels within undershoot_band e_j px of the
   // mask are no evidence, e_j the mask's undershoot measured against the render of G_coarse;
   // 0 = off.
   float undershoot_band = 0.f;
@@ -104,10 +96,6 @@ struct VcarParams {
   // tau_strict; tau_strict <= tau_fine (0) = off.
   float tau_strict = 0.f;
   float split_fraction = 0.1f;
-  // Eq. R9: when the fine vote is split (R7 kept tau_fine), stages 2-3 run once more from the
-  // coarse selection at tau_coarse_split (< tau_coarse), and that pass is the result. Needs
-  // tau_strict; 0 = off.
-  float tau_coarse_split = 0.f;
   // Eq. R8: when the fine vote is split (R7 kept tau_fine), ABR reads each training view's mask
   // widened by its measured undershoot e_j (R6a), and the Gaussians' own footprints (no
   // low-pass). Needs undershoot_band > 0 and tau_strict.
@@ -166,22 +154,20 @@ struct VcarParams {
     return p;
   }
   // vcar's default (beyond the paper, docs/robust.md): tau_coarse 0.5, tau_fine 0.5, the
-  // evidence levels (R2) with the occlusion test in both rounds (R3), unseen fine candidates kept
-  // (R4), views weighted by foreshortening (R5), the fine round's band as wide as the masks'
+  // evidence levels (R2) with the occlusion test in both rounds (R3), views weighted by
+  // foreshortening (R5), the fine round's band as wide as the masks'
   // measured undershoot (R6) where the vote without it splits (R6c), the strict threshold 0.85
   // when the fine vote is decisive (R7), ABR on masks widened by their undershoot when it is
   // split, on their own footprints (R8), hidden candidates on a seen background plane dropped
   // (R10), masks that reach 1 px or more past the render's occlusion edges eroded (R11) and
-  // masks that stop short of them grown to them (R12). R9 (a second pass from the coarse vote
-  // at a lower threshold after a split fine vote) is off since R12. The edge band
-  // (R1) is off: R6-R7 do its work (docs/results.md, ablation). What vcar::segment uses when
-  // given no parameters.
+  // masks that stop short of them grown to them (R12). What vcar::segment uses when given no
+  // parameters. (R1, an edge band, R4, unseen candidates kept, and R9, a second pass from a
+  // lower coarse threshold, were removed: inert in every preset and ablation; docs/robust.md.)
   static VcarParams robust() {
     VcarParams p;
     p.tau_fine = 0.5f;
     p.fine_occlusion = true;
     p.coarse_occlusion = true;
-    p.keep_unseen = true;
     p.foreshortening = true;
     p.undershoot_band = 1.5f;
     p.undershoot_gate = true;
@@ -214,9 +200,9 @@ struct VcarParams {
     return a;
   }
 
-  // True when a mechanism beyond the paper changes the vote (RobustVoting, Eq. R1-R6).
+  // True when a mechanism beyond the paper changes the vote (RobustVoting, Eq. R2-R6).
   bool robust_vote() const {
-    return edge_band > 0.f || fine_occlusion || coarse_occlusion || keep_unseen || foreshortening || undershoot_band > 0.f;
+    return fine_occlusion || coarse_occlusion || foreshortening || undershoot_band > 0.f;
   }
 
   // Calls f(name, field) for every field, names exactly as declared (const and non-const).
@@ -234,13 +220,12 @@ struct VcarParams {
     f("sampled_intrinsics", p.sampled_intrinsics); f("sampled_fov_deg", p.sampled_fov_deg);
     f("background", p.background); f("abr_variant", p.abr_variant);
     f("min_frame_content", p.min_frame_content); f("min_mask_fraction", p.min_mask_fraction);
-    f("force_fine_round", p.force_fine_round); f("edge_band", p.edge_band);
-    f("fine_occlusion", p.fine_occlusion); f("coarse_occlusion", p.coarse_occlusion);
-    f("keep_unseen", p.keep_unseen); f("keep_undecided", p.keep_undecided); f("kappa", p.kappa);
+    f("force_fine_round", p.force_fine_round);
+    f("fine_occlusion", p.fine_occlusion); f("coarse_occlusion", p.coarse_occlusion); f("kappa", p.kappa);
     f("foreshortening", p.foreshortening); f("undershoot_band", p.undershoot_band);
     f("undershoot_gate", p.undershoot_gate);
     f("tau_strict", p.tau_strict); f("split_fraction", p.split_fraction); f("abr_lowpass", p.abr_lowpass);
-    f("abr_undershoot", p.abr_undershoot); f("tau_coarse_split", p.tau_coarse_split);
+    f("abr_undershoot", p.abr_undershoot);
     f("coplanar_radius", p.coplanar_radius); f("coplanar_angle_deg", p.coplanar_angle_deg);
     f("coplanar_slab", p.coplanar_slab); f("overshoot_min", p.overshoot_min);
     f("overshoot_margin", p.overshoot_margin);
@@ -285,7 +270,6 @@ struct VcarParams {
       bad("undershoot_band", "must be in [0, 100] (0 = off), got " + std::to_string(undershoot_band));
     unit("tau_strict", tau_strict);
     unit("split_fraction", split_fraction);
-    unit("tau_coarse_split", tau_coarse_split);
     if (!(coplanar_radius >= 0.f && coplanar_radius <= 10.f))
       bad("coplanar_radius", "must be in [0, 10] (0 = off), got " + std::to_string(coplanar_radius));
     if (!(coplanar_angle_deg > 0.f && coplanar_angle_deg < 90.f))
@@ -300,7 +284,6 @@ struct VcarParams {
     unit("grow_max", grow_max);
     if (!(grow_margin >= 0.f && grow_margin <= 100.f))
       bad("grow_margin", "must be in [0, 100] px, got " + std::to_string(grow_margin));
-    if (!(edge_band >= 0.f && edge_band <= 1.f)) bad("edge_band", "must be in [0, 1] (0 = off), got " + std::to_string(edge_band));
   }
 
 };

@@ -65,8 +65,6 @@ struct Diagnostics {
   bool sss_triggered = false;
   float tau_fine_applied = 0.f;     // the fine round's threshold (Eq. R7: tau_fine or tau_strict); 0: no fine round
   bool undershoot_applied = false;  // Eq. R6 shaped the fine vote (on, and its gate R6c found the vote without it split)
-  float tau_coarse_applied = 0.f;   // the coarse threshold of the selection the result comes from (Eq. R9:
-                                    // tau_coarse, or tau_coarse_split after a split fine vote)
   std::vector<Camera> sampled_cameras;  // V_sampled
   ObjectSphere sphere{};
   std::size_t abr_flagged = 0, abr_compressed = 0;
@@ -198,11 +196,10 @@ public:
   RoundVote(const GaussianScene& scene, const std::vector<Index>* candidates, const VcarParams& p, bool fine)
       : occlusion_(p.occlusion_aware || (fine ? p.fine_occlusion : p.coarse_occlusion)),
         overshoot_(p.overshoot_min > 0.f), grow_(!fine && p.grow_max > 0.f), undershoot_(fine && p.undershoot_band > 0.f),
-        gated_(undershoot_ && p.undershoot_gate),
-        undecided_kept_(!fine && p.keep_undecided), keep_unseen_(fine && p.keep_unseen) {
+        gated_(undershoot_ && p.undershoot_gate) {
     if (p.robust_vote()) {
       // Eq. R6 needs frames rendered from the candidates alone: the fine round's.
-      const RobustVoteOptions o{p.edge_band, p.kappa, p.foreshortening, undershoot_ ? p.undershoot_band : 0.f};
+      const RobustVoteOptions o{p.kappa, p.foreshortening, undershoot_ ? p.undershoot_band : 0.f};
       if (candidates) robust_.emplace(scene, *candidates, o);
       else robust_.emplace(scene, o);
     } else if (candidates) {
@@ -242,7 +239,7 @@ public:
   // Eq. 3 (paper) or Eq. R2-R6 (robust): ascending scene indices and their scores.
   // undershoot = false: the vote without Eq. R6's widening (RobustVoting::ratio).
   void selected(float tau, std::vector<Index>& indices, std::vector<float>& scores, bool undershoot = true) const {
-    if (robust_) return robust_->selected(tau, undecided_kept_, keep_unseen_, indices, scores, undershoot);
+    if (robust_) return robust_->selected(tau, indices, scores, undershoot);
     paper_->selected(tau, indices, scores);
   }
   // The same with Eq. R7 choosing between tau and tau_strict (> tau; else tau); returns the
@@ -274,7 +271,7 @@ private:
     return tau_strict;
   }
 
-  bool occlusion_, overshoot_, grow_, undershoot_, gated_, undecided_kept_, keep_unseen_;
+  bool occlusion_, overshoot_, grow_, undershoot_, gated_;
   std::size_t overshoot_eroded_ = 0, grown_ = 0;
   mutable bool undershoot_applied_ = false;
   std::optional<VisibilityVoting> paper_;
@@ -584,18 +581,9 @@ bool refine(const GaussianScene& scene, const std::vector<Camera>& train_cameras
   return r.finish(progress, t_start, coarse_seen);
 }
 
-// Whether Eq. R9 can ask for a second pass of stages 2 and 3 (from the coarse selection at
-// tau_coarse_split, after a split fine vote).
-inline bool may_retake_coarse(const VcarParams& params) {
-  return params.tau_coarse_split > 0.f && params.tau_coarse_split < params.tau_coarse && params.tau_strict > params.tau_fine;
-}
-
-// Stages 2 and 3 (refine) from the coarse selection at tau_coarse, and, when Eq. R7 finds the
-// fine vote split and tau_coarse_split is on, once more from the coarse selection at
-// tau_coarse_split (Eq. R9; docs/robust.md): masks that undershoot already cost the coarse vote
-// the object's rim. `coarse_selection(tau, indices, scores)` gives the coarse vote's selection at
-// a threshold; `train_masks` holds the coarse round's training masks. Timings of both passes
-// add up under the same names.
+// Stages 2 and 3 (refine) from the coarse selection at tau_coarse: `coarse_selection(tau,
+// indices, scores)` gives the coarse vote's selection at a threshold; `train_masks` holds the
+// coarse round's training masks.
 template <Renderer R, Segmenter S, class CoarseSelection>
 bool refine_from_coarse(const GaussianScene& scene, const std::vector<Camera>& train_cameras, const Prompt& prompt,
                         R& renderer, S& segmenter, const VcarParams& params, const ProgressCallback& progress,
@@ -605,35 +593,8 @@ bool refine_from_coarse(const GaussianScene& scene, const std::vector<Camera>& t
   std::vector<Index> selected;
   std::vector<float> scores;
   coarse_selection(params.tau_coarse, selected, scores);
-  const bool may_retake = may_retake_coarse(params);
-  std::vector<std::optional<RleMask>> coarse_masks;
-  if (may_retake) coarse_masks = train_masks;  // run-length encoded: O(boundary) per view
-  result.diagnostics.tau_coarse_applied = params.tau_coarse;
-  bool complete = refine(scene, train_cameras, prompt, renderer, segmenter, params, progress, t_start, train_masks,
-                         std::move(selected), std::move(scores), result, fine_round, coarse_seen);
-  const Diagnostics& first = result.diagnostics;
-  if (!may_retake || first.tau_fine_applied <= 0.f || !(first.tau_fine_applied < params.tau_strict)) return complete;
-  coarse_selection(params.tau_coarse_split, selected, scores);                                // Eq. R9
-  if (selected.size() <= first.n_coarse) return complete;  // nothing between the two thresholds
-  SegmentationResult second;
-  Diagnostics& d2 = second.diagnostics;
-  d2.n_scene = first.n_scene;
-  d2.masks_missing = first.masks_missing;
-  d2.overshoot_eroded = first.overshoot_eroded;
-  d2.masks_grown = first.masks_grown;
-  d2.tau_coarse_applied = params.tau_coarse_split;
-  train_masks = std::move(coarse_masks);
-  complete = refine(scene, train_cameras, prompt, renderer, segmenter, params, progress, t_start, train_masks,
-                    std::move(selected), std::move(scores), second, fine_round, coarse_seen);
-  std::vector<std::pair<std::string, double>> timings = first.timings_s;
-  for (const auto& stage : d2.timings_s) {  // (not a structured binding: clang 14 cannot capture one)
-    auto at = std::find_if(timings.begin(), timings.end(), [&](const auto& t) { return t.first == stage.first; });
-    if (at == timings.end()) timings.push_back(stage);
-    else at->second += stage.second;
-  }
-  d2.timings_s = std::move(timings);
-  result = std::move(second);
-  return complete;
+  return refine(scene, train_cameras, prompt, renderer, segmenter, params, progress, t_start, train_masks,
+                std::move(selected), std::move(scores), result, fine_round, coarse_seen);
 }
 
 }  // namespace detail
@@ -680,7 +641,7 @@ SegmentationResult segment(const GaussianScene& scene, const std::vector<Camera>
   auto usable = [&](const Mask* m) { return detail::usable(m, params); };
 
   // ---- Stage 1: coarse VWV on the training views, rendered from the whole scene (Eq. 1-3;
-  // with edge_band, Eq. R1-R2).
+  // with the robust vote, Eq. R2-R5).
   stage("coarse");
   const auto t_setup = Clock::now();
   detail::RoundVote coarse(scene, nullptr, params, false);  // Morton order of the means: part of the vote

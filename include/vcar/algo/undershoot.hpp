@@ -10,10 +10,10 @@
 //   e_j  = median over p in C_j of max(0, dist(p, {A_j < 0.5}) - 1)                 (Eq. R6a)
 // (distance between pixel centres; a contour on the render's own edge gives 0, a mask eroded by
 // e px inside the render gives ~e, a dilated one 0). The background pixels of M_j within
-//   reach_j = max(w_j, gamma e_j)                                                   (Eq. R6b)
-// px (Euclidean) of its foreground are no evidence (unsure, Eq. R1b): a Gaussian of G_coarse
-// that the undershooting mask leaves out is not counted as background there. With gamma e_j <= w_j
-// (clean masks: e_j ~ 0-2 px from the splats' own extent) nothing changes. O(W H) per frame.
+//   reach_j = gamma e_j                                                             (Eq. R6b)
+// px (Euclidean) of its foreground are no evidence (unsure): a Gaussian of G_coarse that the
+// undershooting mask leaves out is not counted as background there. With e_j = 0 nothing
+// changes. O(W H) per frame.
 //
 // When the fine vote is split (Eq. R7 kept tau_fine: the masks disagree systematically, as
 // undershooting masks do), ABR (Eq. 9-14) reads each training view's mask widened by its e_j:
