@@ -395,6 +395,10 @@ std::vector<Experiment> plan(const Options& o) {
     return e;
   };
   const std::vector<std::string> rigs = {"forward", "orbit", "sparse", "hemisphere"};
+  // Quick mode (CI's smoke run): the grid on every rig, each sweep once, on the forward rig.
+  const std::vector<std::string> sweep_rigs = q ? std::vector<std::string>{"forward"}
+                                                : std::vector<std::string>{"forward", "orbit"};
+  const std::vector<std::string>& every_rig = q ? sweep_rigs : rigs;
   auto want = [&](const char* sweep) { return o.only.empty() || o.only == sweep; };
   if (want("grid"))
     for (int s = 1; s <= seeds; ++s)
@@ -417,14 +421,14 @@ std::vector<Experiment> plan(const Options& o) {
   if (want("targets"))
     for (int s = 1; s <= seeds; ++s)
       for (const char* t : {"sphere", "torus", "cylinder", "box"})
-        for (const auto& rig : rigs) {
+        for (const auto& rig : every_rig) {
           Experiment e = make(s, rig, "none", 0, sweep_methods);
           e.target = t;
           out.push_back(e);
         }
   if (want("diag"))
     for (int s = 1; s <= seeds; ++s)
-      for (const auto& rig : rigs)
+      for (const auto& rig : every_rig)
         for (const char* f : {"erode_diag", "dilate_diag"})
           for (double L : q ? std::vector<double>{2} : std::vector<double>{1, 2}) {
             std::vector<std::string> ms = sweep_methods;  // full mode: the robust ablation under failures too
@@ -448,7 +452,6 @@ std::vector<Experiment> plan(const Options& o) {
           if (q && std::string(rig) == "orbit") continue;
           out.push_back(e);
         }
-  const std::vector<std::string> sweep_rigs = {"forward", "orbit"};
   const int sweep_seeds = q ? 1 : std::max(1, seeds - 1);  // 2 by default in full mode
   struct Sweep { const char* failure; std::vector<double> levels; };
   std::vector<Sweep> sweeps = q ? std::vector<Sweep>{{"dilate", {4}}, {"blobs", {4}}, {"drop", {0.3}}}
@@ -485,7 +488,7 @@ std::vector<Experiment> plan(const Options& o) {
   }
   // Scene size with the object fixed (forward rig): every stage of VCAR and the peers.
   if (want("size")) {
-    std::vector<std::size_t> sizes = q ? std::vector<std::size_t>{25000, 60000}
+    std::vector<std::size_t> sizes = q ? std::vector<std::size_t>{40000}
                                        : std::vector<std::size_t>{25000, 50000, 100000, 250000, 500000, 1000000};
     for (std::size_t n : sizes) {
       if (o.max_size && n > o.max_size) continue;
