@@ -290,3 +290,89 @@ TEST_CASE("Eq. R6c by hand: ratio(k, false) reads the sure level without R6's wi
   CHECK(off.ratio(0) == off.ratio(0, false));
   CHECK(off.ratio(0) == Approx(0.5f));
 }
+
+TEST_CASE("Eq. R13 by hand: a mask on the wrong object stops voting, one on half the target votes half") {
+  // Target: Gaussians 0 and 1 at pixels (5, 5) and (6, 6); background: 2 and 3 at (15, 15) and
+  // (16, 16). Views 0-2 mask the target, view 3 the background (wrong object), view 4 only
+  // Gaussian 0 (a part). Unweighted (Eq. 3): R = 4/5, 3/5, 1/5, 1/5. Consensus at 0.5: {0, 1}.
+  // Eq. R13a: r = 1, 1, 1, 0 (A 0, B 2, C 2), 1/2 (A 1, B 0, C 1). Eq. R13b: V^r = 3.5 for every
+  // Gaussian; F^r = 3.5, 3, 0, 0. Eq. R2 with kappa 2 over R^0: R_0 = (3.5 + 1.6) / 5.5,
+  // R_1 = (3 + 1.2) / 5.5, R_2 = R_3 = 0.4 / 5.5. The consensus stays {0, 1}: a second pass
+  // changes nothing.
+  const auto scene = scene_of({{-0.5f, -0.5f, 1.f}, {-0.4f, -0.4f, 1.f}, {0.5f, 0.5f, 1.f}, {0.6f, 0.6f, 1.f}});
+  const Mask target = square(0, 0, 10, 10), wrong = square(10, 10, 20, 20), part = square(0, 0, 6, 6);
+  for (const bool on : {false, true}) {
+    CAPTURE(on);
+    vcar::RobustVoteOptions o;
+    o.reliability = on;
+    vcar::RobustVoting v(scene, o);
+    for (int j = 0; j < 3; ++j) v.add_view(cam20(("good" + std::to_string(j)).c_str()), &target);
+    v.add_view(cam20("wrong"), &wrong);
+    v.add_view(cam20("part"), &part);
+    const std::vector<float> r = v.weigh_views(0.5f);
+    if (!on) {
+      CHECK(r.empty());
+      CHECK(v.ratio(0) == Approx(0.8f)); CHECK(v.ratio(1) == Approx(0.6f)); CHECK(v.ratio(2) == Approx(0.2f));
+      continue;
+    }
+    REQUIRE(r.size() == 5);
+    CHECK(r[0] == 1.f); CHECK(r[1] == 1.f); CHECK(r[2] == 1.f);
+    CHECK(r[3] == 0.f);
+    CHECK(r[4] == 0.5f);
+    CHECK(v.ratio(0) == Approx(5.1f / 5.5f).margin(1e-6));
+    CHECK(v.ratio(1) == Approx(4.2f / 5.5f).margin(1e-6));
+    CHECK(v.ratio(2) == Approx(0.4f / 5.5f).margin(1e-6));
+    CHECK(v.ratio(3) == Approx(0.4f / 5.5f).margin(1e-6));
+  }
+}
+
+TEST_CASE("Eq. R13 against brute force: view weights and weighted counts on random scenes") {
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<float> u(-0.9f, 0.9f);
+  std::vector<Eigen::Vector3f> mus;
+  for (int i = 0; i < 300; ++i) mus.push_back({u(rng), u(rng), 1.f + 0.5f * (u(rng) + 0.9f)});
+  const auto scene = scene_of(mus);
+  std::vector<Mask> masks;
+  std::uniform_int_distribution<int> c(0, 19);
+  for (int j = 0; j < 7; ++j) {
+    const int x0 = c(rng), y0 = c(rng);
+    masks.push_back(square(std::min(x0, 8), std::min(y0, 8), std::max(x0, 12), std::max(y0, 12)));
+  }
+  vcar::RobustVoteOptions o;
+  o.reliability = true;
+  o.kappa = 1.f;
+  vcar::RobustVoting v(scene, o);
+  v.chunk = 64;  // several chunks
+  for (std::size_t j = 0; j < masks.size(); ++j) v.add_view(cam20(("v" + std::to_string(j)).c_str()), &masks[j]);
+  // Brute force: in-view and in-mask per (i, j) by projecting the means (cam20: pixel 10 x / z + 10).
+  auto at = [&](std::size_t i, std::size_t j, bool& seen) {
+    const float px = 10.f * mus[i].x() / mus[i].z() + 10.f, py = 10.f * mus[i].y() / mus[i].z() + 10.f;
+    seen = px >= 0.f && py >= 0.f && px < 20.f && py < 20.f;
+    return seen && masks[j].data[static_cast<std::size_t>(static_cast<int>(py)) * 20 + static_cast<std::size_t>(static_cast<int>(px))] != 0;
+  };
+  std::vector<float> R0(mus.size());
+  for (std::size_t i = 0; i < mus.size(); ++i) {
+    int V = 0, F = 0;
+    for (std::size_t j = 0; j < masks.size(); ++j) { bool s; F += at(i, j, s); V += s; }
+    R0[i] = static_cast<float>(F) / static_cast<float>(std::max(V, 1));
+  }
+  const std::vector<float> r = v.weigh_views(0.5f, 1);  // one pass: the consensus is Eq. 3's
+  for (std::size_t j = 0; j < masks.size(); ++j) {
+    int a = 0, b = 0, cc = 0;
+    for (std::size_t i = 0; i < mus.size(); ++i) {
+      bool s;
+      const bool f = at(i, j, s);
+      const bool S = R0[i] >= 0.5f;
+      if (!s) continue;
+      a += S && f; b += !S && f; cc += S && !f;
+    }
+    CAPTURE(j);
+    CHECK(r[j] == Approx(a + b + cc ? static_cast<float>(a) / static_cast<float>(a + b + cc) : 1.f).margin(1e-6));
+  }
+  for (std::size_t i = 0; i < mus.size(); ++i) {
+    double V = 0, F = 0;
+    for (std::size_t j = 0; j < masks.size(); ++j) { bool s; const bool f = at(i, j, s); V += s ? r[j] : 0; F += f ? r[j] : 0; }
+    CAPTURE(i);
+    CHECK(v.ratio(i) == Approx((F + 1.0 * R0[i]) / (V + 1.0)).margin(1e-5));
+  }
+}

@@ -125,6 +125,10 @@ struct VcarParams {
   // sqrt(|M| / pi)); grow_max 0 = off.
   float grow_max = 0.f;
   float grow_margin = 1.f;
+  // Eq. R13: after each round's vote, every view is weighted by how its mask agrees with the
+  // round's consensus (Jaccard on the candidates it sees, unoccluded by R3 where that is on), and
+  // the vote is taken again with the weights (view_reliability.hpp).
+  bool view_reliability = false;
 
   // Paper defaults for NVOS (Sec. 4.2).
   static VcarParams nvos() { return VcarParams{}; }
@@ -202,7 +206,7 @@ struct VcarParams {
 
   // True when a mechanism beyond the paper changes the vote (RobustVoting, Eq. R2-R6).
   bool robust_vote() const {
-    return fine_occlusion || coarse_occlusion || foreshortening || undershoot_band > 0.f;
+    return fine_occlusion || coarse_occlusion || foreshortening || undershoot_band > 0.f || view_reliability;
   }
 
   // Calls f(name, field) for every field, names exactly as declared (const and non-const).
@@ -230,6 +234,7 @@ struct VcarParams {
     f("coplanar_slab", p.coplanar_slab); f("overshoot_min", p.overshoot_min);
     f("overshoot_margin", p.overshoot_margin);
     f("grow_max", p.grow_max); f("grow_margin", p.grow_margin);
+    f("view_reliability", p.view_reliability);
   }
 
   // Throws vcar::Error naming the first parameter outside its range.

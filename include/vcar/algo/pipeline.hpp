@@ -199,7 +199,7 @@ public:
         gated_(undershoot_ && p.undershoot_gate) {
     if (p.robust_vote()) {
       // Eq. R6 needs frames rendered from the candidates alone: the fine round's.
-      const RobustVoteOptions o{p.kappa, p.foreshortening, undershoot_ ? p.undershoot_band : 0.f};
+      const RobustVoteOptions o{p.kappa, p.foreshortening, undershoot_ ? p.undershoot_band : 0.f, p.view_reliability};
       if (candidates) robust_.emplace(scene, *candidates, o);
       else robust_.emplace(scene, o);
     } else if (candidates) {
@@ -235,6 +235,11 @@ public:
     if (robust_) robust_->add_view(cam, m, depth, alpha, tolerance);
     else if (depth) paper_->add_view(cam, m, depth, alpha, tolerance);
     else paper_->add_view(cam, m);
+  }
+  // Eq. R13: the views weighted by their agreement with the vote at tau (after the last view;
+  // nothing without view_reliability).
+  void weigh_views(float tau) {
+    if (robust_) robust_->weigh_views(tau);
   }
   // Eq. 3 (paper) or Eq. R2-R6 (robust): ascending scene indices and their scores.
   // undershoot = false: the vote without Eq. R6's widening (RobustVoting::ratio).
@@ -475,6 +480,7 @@ public:
     timing("fine_segment", segment_s);
     timing("fine_voting", voting_s);
     diag_.overshoot_eroded += fine_->overshoot_eroded();
+    fine_->weigh_views(params_.tau_fine);  // Eq. R13
     diag_.tau_fine_applied = fine_->selected(params_.tau_fine, params_.tau_strict, params_.split_fraction, selected_, scores_);
     split_ = diag_.tau_fine_applied < params_.tau_strict;  // R7 found the vote split
     diag_.undershoot_applied = fine_->undershoot_applied();
@@ -658,6 +664,7 @@ SegmentationResult segment(const GaussianScene& scene, const std::vector<Camera>
   timing("coarse_voting", setup + t1.voting);
   diag.overshoot_eroded = coarse.overshoot_eroded();
   diag.masks_grown = coarse.grown();
+  coarse.weigh_views(params.tau_coarse);  // Eq. R13
   const bool complete = detail::refine_from_coarse(
       scene, train_cameras, prompt, renderer, segmenter, params, progress, t_start, train_masks,
       [&](float tau, std::vector<Index>& selected, std::vector<float>& scores) { coarse.selected(tau, selected, scores); },

@@ -29,7 +29,11 @@
 //   gamma (Eq. R6, undershoot.hpp): in a round whose frames are renders of the candidates, the
 //                   background pixels within gamma e_j of the mask are unsure, e_j the mask's
 //                   undershoot measured against the render's alpha. ratio(k, false) reads the
-//                   vote without R6 (R^1: what R6's gate, Eq. R6c, decides on).
+//                   vote without R6 (R^1: what R6's gate, Eq. R6c, decides on);
+//   reliability (Eq. R13, view_reliability.hpp): after the round, weigh_views(tau) weighs each
+//                   view by how its mask agrees with the round's consensus, and the unoccluded
+//                   level sums r_j (times omega_ij with R5) instead of counting views; two bits
+//                   per candidate and view.
 // Views are voted one at a time over all candidates in parallel chunks; each candidate is
 // written by one thread, so results are identical for any thread count.
 #include <algorithm>
@@ -43,6 +47,7 @@
 #include "vcar/algo/foreshortening.hpp"
 #include "vcar/algo/mean_projection.hpp"
 #include "vcar/algo/undershoot.hpp"
+#include "vcar/algo/view_reliability.hpp"
 #include "vcar/core/camera.hpp"
 #include "vcar/core/error.hpp"
 #include "vcar/core/gaussian_scene.hpp"
@@ -56,6 +61,7 @@ struct RobustVoteOptions {
   float kappa = 2.f;            // Eq. R2: prior weight in views
   bool foreshortening = false;  // Eq. R5: views weighted by how face-on they see the Gaussian
   float gamma = 0.f;            // Eq. R6: outer band reach factor on the undershoot (0 = off)
+  bool reliability = false;     // Eq. R13: views weighted by their agreement with the consensus
 };
 
 class RobustVoting {
@@ -92,7 +98,10 @@ public:
         throw Error("depth/alpha image is not the view's size with one channel", where);
     if (views_ + 1 > max_views) throw Error("more than 65535 views with masks (uint16_t counters)", where);
     if (!(o_.kappa >= 0.f)) throw Error("kappa must be >= 0", "voting");
+    if (o_.reliability && chunk % 64 != 0) throw Error("chunk must be a multiple of 64 with reliability", "voting");
     ++views_;
+    weighed_ = false;
+    if (o_.reliability) rel_.add_view(), centres_.push_back(camera.position());
     const std::uint8_t* sure = nullptr;  // null: every pixel is sure
     if (sure_level() && alpha) {
       last_undershoot_ = undershoot_px(*mask, *alpha);                                     // Eq. R6a
@@ -127,6 +136,7 @@ public:
           ++c_[0][i]; c_[1][i] = static_cast<std::uint16_t>(c_[1][i] + f);                  // Eq. 2
           if (D && A[p] >= 0.5f && !(z[l] <= D[p] / A[p] * scale)) continue;                  // Eq. R3
           ++c_[2][i]; c_[3][i] = static_cast<std::uint16_t>(c_[3][i] + f);
+          if (o_.reliability) rel_.see(i, f != 0);                                            // Eq. R13
           const float omega = weighted ? fs_.weight(i, x_[i], y_[i], z_[i], C) : 1.f;        // Eq. R5
           if (weighted) { w_[0][i] += omega; w_[1][i] += f ? omega : 0.f; }
           if (!sure_counts || (sure && !sure[p])) continue;                                    // Eq. R6b
@@ -151,6 +161,26 @@ public:
   float weighted_foreground(std::size_t k, int level) const {
     return o_.foreshortening ? w_[2 * at(level) - 1][k] : 0.f;
   }
+  // Eq. R13: weighs the views voted so far by their agreement with the consensus at `tau`
+  // (first the unweighted vote's, then the weighted one's, `iterations` times); the unoccluded
+  // level then sums the weights. No effect without the reliability option. Returns r_j.
+  const std::vector<float>& weigh_views(float tau, int iterations = 2) {
+    if (!o_.reliability) return view_weights_;
+    auto omega = [&](std::size_t k, std::size_t j) {
+      return o_.foreshortening ? fs_.weight(k, x_[k], y_[k], z_[k], centres_[j]) : 1.f;   // Eq. R5
+    };
+    weighed_ = false;
+    for (int it = 0; it < iterations; ++it) {
+      const auto consensus = rel_.bits([&](std::size_t k) { return ratio(k) >= tau; });
+      view_weights_ = rel_.agreement(consensus);                                             // Eq. R13a
+      rel_.weighted(view_weights_, rv_, rf_, omega);                                         // Eq. R13b
+      weighed_ = true;
+    }
+    return view_weights_;
+  }
+  // r_j of the latest weigh_views (empty before it).
+  const std::vector<float>& view_weights() const noexcept { return view_weights_; }
+
   // Eq. R6a of the latest view voted with gamma > 0 and a render (px).
   double last_undershoot_px() const noexcept { return last_undershoot_; }
 
@@ -164,9 +194,11 @@ public:
     const int top = undershoot && sure_level() ? 2 : 1;
     for (int level = 1; level <= top; ++level) {
       const bool same = visible(k, level) == visible(k, level - 1) && foreground(k, level) == foreground(k, level - 1);
-      if (same && !(o_.foreshortening && level == 1)) continue;
-      const float V = o_.foreshortening ? weight(k, level) : static_cast<float>(visible(k, level));
-      const float F = o_.foreshortening ? weighted_foreground(k, level) : static_cast<float>(foreground(k, level));
+      const bool weighed = weighed_ && level == 1;  // Eq. R13b
+      if (same && !((o_.foreshortening || weighed) && level == 1)) continue;
+      float V = o_.foreshortening ? weight(k, level) : static_cast<float>(visible(k, level));
+      float F = o_.foreshortening ? weighted_foreground(k, level) : static_cast<float>(foreground(k, level));
+      if (weighed) V = rv_[k], F = rf_[k];
       if (V + o_.kappa > 0.f) R = (F + o_.kappa * R) / (V + o_.kappa);                    // Eq. R2
     }
     return R;
@@ -198,6 +230,7 @@ private:
       fs_ = Foreshortening::of(scene, candidates_);
       for (std::size_t c = 0; c < counters - 2; ++c) w_[c].assign(n, 0.f);
     }
+    if (o_.reliability) rel_ = ViewReliability(n);
   }
 
   RobustVoteOptions o_;
@@ -210,6 +243,10 @@ private:
   std::array<std::vector<float>, 4> w_;  // Eq. R5: weighted V^o, F^o, V^s, F^s
   std::vector<std::uint8_t> outer_;      // Eq. R6b: the sure plane with the outer band
   double last_undershoot_ = 0;
+  ViewReliability rel_;                  // Eq. R13: V_j, F_j per view
+  std::vector<Eigen::Vector3f> centres_; // camera centre per view (Eq. R5 with R13)
+  std::vector<float> view_weights_, rv_, rf_;  // r_j; V^r, F^r per candidate
+  bool weighed_ = false;
 };
 
 }  // namespace vcar
