@@ -9,7 +9,8 @@
 // Scenes: the synthetic world of tests/determinism (oracle masks) and the two real trained
 // scenes of tests/data (donut.ply, train-1000.ply) seen by an orbit of cameras, the target a
 // fixed half of the scene, masked by rendering it (alpha > 0.5). Every run forces the spiral
-// views, so every stage (votes, sphere, view completeness, SSS, fine vote, ABR) contributes.
+// views, so every stage (votes, sphere, view completeness, SSS, fine vote, ABR) contributes;
+// each scene runs the paper's preset (nvos) and the default (robust).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -95,6 +96,9 @@ void synthetic_scene(Fingerprint& fp) {
   prompt.reference_view = rig.reference;
   const auto r = vcar::segment(world.scene, rig.train, prompt, renderer, oracle, all_stages(vcar::VcarParams::nvos()));
   put_result(fp, "synth.nvos", r, world.scene, rig.eval.front(), renderer);
+  // The default preset (vcar::segment without parameters) as well.
+  const auto d = vcar::segment(world.scene, rig.train, prompt, renderer, oracle, all_stages(vcar::VcarParams::robust()));
+  put_result(fp, "synth.robust", d, world.scene, rig.eval.front(), renderer);
 
   vcar::RenderRequest q;
   q.scene = &world.scene;
@@ -154,6 +158,8 @@ void real_scene(Fingerprint& fp, const std::string& name, const std::string& fil
   prompt.reference_view = 0;
   const auto r = vcar::segment(scene, cams, prompt, renderer, segmenter, all_stages(vcar::VcarParams::nvos()));
   put_result(fp, name + ".nvos", r, scene, cams[3], renderer);
+  const auto d = vcar::segment(scene, cams, prompt, renderer, segmenter, all_stages(vcar::VcarParams::robust()));
+  put_result(fp, name + ".robust", d, scene, cams[3], renderer);
 
   vcar::RenderRequest q;
   q.scene = &scene;
