@@ -226,7 +226,7 @@ TEST_CASE("Eq. R6c in the vote: ratio(k, false) is the vote without R6, bit for 
   {
     for (bool fs : {false, true}) {
       CAPTURE(fs);
-      vcar::RobustVoteOptions with_r6{2.f, fs, 1.5f}, without_r6{2.f, fs, 0.f};
+      vcar::RobustVoteOptions with_r6{2.f, fs, 1.5f, false}, without_r6{2.f, fs, 0.f, false};
       vcar::RobustVoting a(scene, cand, with_r6), b(scene, cand, without_r6);
       for (int j = 0; j < 10; ++j) {
         Camera c = Camera::look_at({2.f * std::cos(0.6f * j), 0.4f, 2.5f + 2.f * std::sin(0.6f * j)}, {0, 0, 2.5f},
