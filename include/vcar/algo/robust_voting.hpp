@@ -178,9 +178,6 @@ public:
     }
     return view_weights_;
   }
-  // r_j of the latest weigh_views (empty before it).
-  const std::vector<float>& view_weights() const noexcept { return view_weights_; }
-
   // Eq. R6a of the latest view voted with gamma > 0 and a render (px).
   double last_undershoot_px() const noexcept { return last_undershoot_; }
 
@@ -195,7 +192,7 @@ public:
     for (int level = 1; level <= top; ++level) {
       const bool same = visible(k, level) == visible(k, level - 1) && foreground(k, level) == foreground(k, level - 1);
       const bool weighed = weighed_ && level == 1;  // Eq. R13b
-      if (same && !((o_.foreshortening || weighed) && level == 1)) continue;
+      if (same && !(weighed || (o_.foreshortening && level == 1))) continue;
       float V = o_.foreshortening ? weight(k, level) : static_cast<float>(visible(k, level));
       float F = o_.foreshortening ? weighted_foreground(k, level) : static_cast<float>(foreground(k, level));
       if (weighed) V = rv_[k], F = rf_[k];
