@@ -129,10 +129,6 @@ struct VcarParams {
   // round's consensus (Jaccard on the candidates it sees, unoccluded by R3 where that is on), and
   // the vote is taken again with the weights (view_reliability.hpp).
   bool view_reliability = false;
-  // Eq. R14: each fine-round mask moved by the integer translation (within
-  // ceil(fine_registration sqrt(|A|)) px, A the render's alpha > 0.5) that best overlaps the
-  // render of G_coarse it was drawn on (mask_registration.hpp); 0 = off.
-  float fine_registration = 0.f;
 
   // Paper defaults for NVOS (Sec. 4.2).
   static VcarParams nvos() { return VcarParams{}; }
@@ -238,7 +234,7 @@ struct VcarParams {
     f("coplanar_slab", p.coplanar_slab); f("overshoot_min", p.overshoot_min);
     f("overshoot_margin", p.overshoot_margin);
     f("grow_max", p.grow_max); f("grow_margin", p.grow_margin);
-    f("view_reliability", p.view_reliability); f("fine_registration", p.fine_registration);
+    f("view_reliability", p.view_reliability);
   }
 
   // Throws vcar::Error naming the first parameter outside its range.
@@ -286,8 +282,6 @@ struct VcarParams {
     if (!(coplanar_slab >= 0.f && std::isfinite(coplanar_slab))) bad("coplanar_slab", "must be >= 0");
     if (coplanar_radius > 0.f && !coarse_occlusion)
       bad("coplanar_radius", "Eq. R10 reads the coarse round's occlusion test: set coarse_occlusion=true or coplanar_radius=0");
-    if (!(fine_registration >= 0.f && fine_registration <= 1.f))
-      bad("fine_registration", "must be in [0, 1] (0 = off), got " + std::to_string(fine_registration));
     if (!(overshoot_min >= 0.f && overshoot_min <= 100.f))
       bad("overshoot_min", "must be in [0, 100] px (0 = off), got " + std::to_string(overshoot_min));
     if (!(overshoot_margin >= 0.f && overshoot_margin <= 100.f))

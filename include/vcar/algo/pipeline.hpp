@@ -23,7 +23,6 @@
 #include "vcar/algo/boundary_refinement.hpp"
 #include "vcar/algo/coplanar_background.hpp"
 #include "vcar/algo/decisive_threshold.hpp"
-#include "vcar/algo/mask_registration.hpp"
 #include "vcar/algo/occlusion_growth.hpp"
 #include "vcar/algo/overshoot.hpp"
 #include "vcar/algo/params.hpp"
@@ -73,7 +72,6 @@ struct Diagnostics {
   std::size_t abr_masks_widened = 0; // training masks ABR read widened by their undershoot (Eq. R8)
   std::size_t coplanar_dropped = 0;  // hidden candidates on a seen background plane, dropped (Eq. R10)
   std::size_t overshoot_eroded = 0;  // masks voted eroded by their measured overshoot (Eq. R11), every round
-  std::size_t masks_registered = 0;  // fine-round masks moved onto their render's silhouette (Eq. R14)
   std::size_t masks_grown = 0;       // coarse-round masks voted grown to the render's occlusion edges (Eq. R12)
   std::size_t masks_missing = 0;    // frames the segmenter answered with "no mask"
   std::size_t mask_store_bytes = 0; // run-length bytes held for ABR
@@ -462,23 +460,13 @@ public:
   bool has_round() const { return fine_.has_value(); }
   const std::vector<Camera>& frames() const { return fine_frames_; }  // reference view first
   const std::vector<Index>& coarse_set() const { return coarse_set_; }
-  // Whether on_mask wants each frame's render (the vote's depth tests, Eq. R14's alpha).
-  bool wants_depth() const { return fine_ && (fine_->wants_depth() || params_.fine_registration > 0.f); }
+  bool wants_depth() const { return fine_ && fine_->wants_depth(); }
 
   // The mask of fine frame k (null: none); `render` of that frame (depth and alpha) when the
   // round kept it, else vote() renders it.
   template <Renderer R>
   void on_mask(std::size_t k, const Mask* m, const RenderOutput* render, R& renderer) {
-    m = usable(m, params_);
-    if (m && render && params_.fine_registration > 0.f) {
-      const MaskShift s = register_to_alpha(*m, render->alpha, registration_radius(render->alpha, params_.fine_registration));  // Eq. R14
-      if (s.dx != 0 || s.dy != 0) {
-        registered_ = shifted(*m, s.dx, s.dy);
-        m = &registered_;
-        ++diag_.masks_registered;
-      }
-    }
-    m = vote(*fine_, fine_frames_[k], m, render, scene_, &coarse_set_, renderer, params_, scratch_);
+    m = vote(*fine_, fine_frames_[k], usable(m, params_), render, scene_, &coarse_set_, renderer, params_, scratch_);
     const std::size_t t = fine_train_[k];
     if (t < order_.size()) {
       train_masks_[order_[t]] = m && params_.enable_abr ? std::optional<RleMask>(RleMask::encode(*m)) : std::nullopt;
@@ -577,8 +565,7 @@ private:
   std::vector<Camera> fine_frames_;
   std::vector<std::size_t> fine_train_;  // fine frame -> training frame k (npos: sampled)
   std::optional<RoundVote> fine_;
-  Mask scratch_;     // a mask eroded by Eq. R11
-  Mask registered_;  // a mask moved by Eq. R14
+  Mask scratch_;  // a mask eroded by Eq. R11
 };
 
 // Stages 2 and 3 for one object, its fine round asked of `segmenter` alone (ObjectRefinement).
