@@ -53,7 +53,7 @@ TEST_CASE("lambda segmenters stream one answer per frame, null for no mask") {
   std::vector<vcar::Camera> cams(3);
   for (auto& c : cams) { c.width = 4; c.height = 3; }
   int rendered = 0;
-  vcar::FrameSequence f{cams, [&](std::size_t) { ++rendered; return vcar::ImageRGB8(4, 3, 3); }};
+  vcar::FrameSequence f{cams, [&](std::size_t) { ++rendered; return vcar::ImageRGB8(4, 3, 3); }, false, {}};
   auto seg = box_segmenter();
   std::vector<int> answers(3, -1);
   seg.segment(f, {}, [&](std::size_t k, const vcar::Mask* m) { answers[k] = m ? (*m)(1, 1) : 0; });

@@ -26,7 +26,7 @@ TEST_CASE("MaskFolderSegmenter answers each frame with the mask named after its 
   vcar::io::write_png(tmp / "notes.txt", m3);  // ignored: not an image extension
 
   vcar::io::MaskFolderSegmenter seg(tmp.path);
-  vcar::FrameSequence frames{cams, [](std::size_t) -> vcar::ImageRGB8 { FAIL("must not render"); return {}; }};
+  vcar::FrameSequence frames{cams, [](std::size_t) -> vcar::ImageRGB8 { FAIL("must not render"); return {}; }, false, {}};
   const auto masks = vcar::segment_all(seg, frames, vcar::Prompt{});
   REQUIRE(masks.size() == 4);
   REQUIRE(masks[0]);
@@ -40,7 +40,7 @@ TEST_CASE("MaskFolderSegmenter answers each frame with the mask named after its 
 
   vcar::MaskFolderSegmenter alias(tmp.path);  // the name the Segmenter docs use
   cams[0].width = 5;
-  vcar::FrameSequence wrong{cams, {}};
+  vcar::FrameSequence wrong{cams, {}, false, {}};
   require_error([&] { vcar::segment_all(alias, wrong, vcar::Prompt{}); }, {"IMG_02.png", "4 x 3", "5 x 3"});
   require_error([&] { vcar::io::MaskFolderSegmenter bad(tmp / "nope"); }, {"nope"});
 }
