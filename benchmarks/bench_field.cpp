@@ -4,11 +4,14 @@
 // 3D result. docs/results.md ("Field") has the command, the table and the charts.
 //
 //   bench_field [--quick] [--out DIR] [--stage FILE] [--seeds tuning|heldout|all|N,N,...]
-//               [--targets a,b] [--rigs forward,orbit] [--segmenters grabcut,oracle,oracle-sam]
-//               [--methods vcar:paper,vcar:robust,naive,...] [--width W --height H]
+//               [--targets a,b] [--rigs forward,orbit]
+//               [--segmenters grabcut,oracle,oracle-sam,oracle-sam-nodrift]
+//               [--methods vcar:paper,vcar:robust,vcar:code,naive,...] [--width W --height H]
 //               [--set key=value]... (VcarParams of the vcar:robust runs only: tuning the default)
 //               [--sam key=value]... (oracle-sam's levels instead of sam_levels': p_wrong, p_part,
 //               p_leak, leak_px, drift_px)
+//               [--isnet CMD] (the isnet segmenter's program; default node
+//               examples/segmenters/isnet/isnet.mjs of this source tree)
 //
 // Seeds: tuning seeds 1 and 2 (the default may be tuned on them), held-out reporting seeds
 // 11-15 (never tuned on); the CSV's `role` column says which a row is. --seeds all (default)
@@ -33,9 +36,15 @@
 //  - oracle: synth::OracleSegmenter in the honest rendered mode (what each frame's render draws:
 //    the whole scene in the coarse round, G_coarse in the fine round), no failure;
 //  - oracle-sam: the same with the SAM-like failures of synth/sam_failures.hpp at the moderate
-//    levels of sam_levels() below (--sam changes them).
+//    levels of sam_levels() below (--sam changes them);
+//  - oracle-sam-nodrift: oracle-sam without its drift along the sequence (the same per-frame
+//    draws), so the field tells the per-frame failures from the drift;
+//  - isnet (only when named): ISNet through the external segmenter protocol
+//    (examples/segmenters/isnet, installed by its install.sh), each frame cut around the
+//    prompt's box lifted into it, as `vcar segment --segmenter-cmd`.
 // Methods: vcar:paper (the paper's preset for the rig: nvos forward-facing, lerf 360), vcar:robust
-// (the library's default, VcarParams::robust()), and the peers (evidence/methods.hpp), which take
+// (the library's default, VcarParams::robust()), vcar:code (VcarParams::reference_code(): the
+// released code's constants and rules, conventions §7), and the peers (evidence/methods.hpp), which take
 // the coarse round's training masks.
 //
 // Cost: the coarse round's training masks (frames rendering the whole scene) are the same for
@@ -75,6 +84,7 @@
 #include "vcar/backends/cpu/tiled_renderer.hpp"
 #include "vcar/core/parallel.hpp"
 #include "vcar/eval/mask_metrics.hpp"
+#include "vcar/io/external_segmenter.hpp"
 #include "vcar/io/params_text.hpp"
 #include "vcar/io/scene_file.hpp"
 #include "vcar/synth/ground_truth.hpp"
@@ -131,11 +141,13 @@ synth::SamFailures sam_levels(int width, const std::vector<std::string>& overrid
   return s;
 }
 
-const std::vector<std::string> kSegmenters = {"grabcut", "oracle", "oracle-sam"};
+const std::vector<std::string> kSegmenters = {"grabcut", "oracle", "oracle-sam", "oracle-sam-nodrift"};
+// Segmenters run only when named (--segmenters): ISNet costs 4-10 s a frame on 2 cores.
+const std::vector<std::string> kNamedOnly = {"isnet"};
 const std::vector<std::string> kRigs = {"forward", "orbit"};
 
 std::vector<std::string> all_methods() {
-  std::vector<std::string> m = {"vcar:paper", "vcar:robust"};
+  std::vector<std::string> m = {"vcar:paper", "vcar:robust", "vcar:code"};
   for (const auto& p : evidence::kPeers) m.push_back(p);
   return m;
 }
@@ -311,6 +323,7 @@ struct Options {
   std::string seeds = "all";
   std::vector<std::string> targets, rigs, segmenters, methods, set;
   std::vector<std::string> sam;  // --sam key=value: oracle-sam's levels instead of sam_levels' defaults
+  std::string isnet = VCAR_FIELD_ISNET_DEFAULT;  // --isnet CMD: the isnet segmenter's program
   int width = 0, height = 0;
 };
 
@@ -348,9 +361,9 @@ struct Cell {
 // The default grid, cut from the full one (docs/results.md "Field" says why and what it costs):
 // GrabCut on the forward-facing rig, on every seed (the tuning seeds are where the default is
 // tuned against GrabCut's failures); the oracle on both rigs and the SAM-like oracle on the
-// forward rig, on the held-out seeds. lbg (a kNN graph of the whole scene: 25-65 s a run on the
-// stage's 390k Gaussians) only with the oracle on the forward rig. Explicit --segmenters,
-// --rigs or --methods: their cross product instead, on every seed.
+// forward rig (with and without its drift), on the held-out seeds. lbg (a kNN graph of the
+// whole scene: 25-65 s a run on the stage's 390k Gaussians) only with the oracle on the forward
+// rig. Explicit --segmenters, --rigs or --methods: their cross product instead, on every seed.
 std::vector<Cell> plan_cells(const Options& o) {
   std::vector<Cell> cells;
   std::vector<std::string> no_lbg = all_methods();
@@ -362,6 +375,7 @@ std::vector<Cell> plan_cells(const Options& o) {
     cells.push_back({"oracle", "forward", all_methods(), true});
     cells.push_back({"oracle", "orbit", no_lbg, true});
     cells.push_back({"oracle-sam", "forward", no_lbg, true});
+    cells.push_back({"oracle-sam-nodrift", "forward", no_lbg, true});
   }
   if (!o.segmenters.empty() || !o.rigs.empty() || !o.methods.empty()) {  // explicit lists: their cross product
     cells.clear();
@@ -370,14 +384,15 @@ std::vector<Cell> plan_cells(const Options& o) {
         cells.push_back({s, r, o.methods.empty() ? (o.quick ? std::vector<std::string>{"vcar:paper", "vcar:robust", "naive"} : all_methods()) : o.methods});
   }
   for (const Cell& c : cells) {
-    if (std::find(kSegmenters.begin(), kSegmenters.end(), c.segmenter) == kSegmenters.end())
-      throw Error("unknown segmenter '" + c.segmenter + "' (grabcut, oracle, oracle-sam)", "--segmenters");
+    if (std::find(kSegmenters.begin(), kSegmenters.end(), c.segmenter) == kSegmenters.end() &&
+        std::find(kNamedOnly.begin(), kNamedOnly.end(), c.segmenter) == kNamedOnly.end())
+      throw Error("unknown segmenter '" + c.segmenter + "' (grabcut, oracle, oracle-sam, oracle-sam-nodrift, isnet)", "--segmenters");
     if (std::find(kRigs.begin(), kRigs.end(), c.rig) == kRigs.end())
       throw Error("unknown rig '" + c.rig + "' (forward, orbit)", "--rigs");
     const std::vector<std::string> known = all_methods();
     for (const auto& m : c.methods)
       if (std::find(known.begin(), known.end(), m) == known.end())
-        throw Error("unknown method '" + m + "' (vcar:paper, vcar:robust, naive, sagd, flashsplat, gaussiancut, ludvig, lbg)", "--methods");
+        throw Error("unknown method '" + m + "' (vcar:paper, vcar:robust, vcar:code, naive, sagd, flashsplat, gaussiancut, ludvig, lbg)", "--methods");
   }
   return cells;
 }
@@ -531,11 +546,40 @@ private:
       return {};
 #endif
     }
-    if (name != "oracle" && name != "oracle-sam") throw Error("unknown segmenter '" + name + "'", "--segmenters");
+    if (name == "isnet") {
+      // The external segmenter protocol (io/external_segmenter.hpp), as `vcar segment
+      // --segmenter-cmd` runs it: prompt.json's "boxes" are the prompt lifted into every frame.
+      // `seconds`: the program's wall time, the frames' renders taken out.
+      auto lifted = std::make_shared<LiftedPrompt>(lift_prompt(k.w->scene, k.rig->train, k.prompt, renderer_));
+      io::ExternalSegmenterOptions eo;
+      eo.boxes = [lifted](std::size_t, const Camera& c) { return lifted->box_for(c); };
+      auto e = std::make_shared<io::ExternalSegmenter>(opt_.isnet, eo);
+      auto secs = std::make_shared<double>(0.0);
+      return {[e, secs](const FrameSequence& f, const Prompt& p, const MaskSink& s) {
+                double renders = 0;
+                FrameSequence timed = f;
+                timed.image = [&](std::size_t k) {
+                  const auto tr = Clock::now();
+                  ImageRGB8 img = f.image(k);
+                  renders += since(tr);
+                  return img;
+                };
+                const auto t0 = Clock::now();
+                e->segment(timed, p, s);
+                *secs += since(t0) - renders;
+              },
+              secs};
+    }
+    if (name != "oracle" && name != "oracle-sam" && name != "oracle-sam-nodrift")
+      throw Error("unknown segmenter '" + name + "'", "--segmenters");
     synth::OracleParams p;
     p.mode = synth::OracleMode::rendered;
     p.seed = static_cast<std::uint64_t>(k.seed) * 7919u + 13u;
     if (name == "oracle-sam") p.sam = sam_levels(width_, opt_.sam);
+    if (name == "oracle-sam-nodrift") {  // the same draws per frame, without the sequence's drift
+      p.sam = sam_levels(width_, opt_.sam);
+      p.sam.drift_px = 0.f;
+    }
     auto o = std::make_shared<synth::OracleSegmenter>(*k.w, p, renderer_, labels);
     return {[o](const FrameSequence& f, const Prompt& pr, const MaskSink& s) {
               // A real segmenter looks at each frame's render: the fine round's renders of
@@ -626,8 +670,11 @@ private:
           p = VcarParams::robust();
           for (const std::string& kv : opt_.set) io::set_parameter(p, kv);
           r.preset = "robust";
+        } else if (r.variant == "code") {
+          p = VcarParams::reference_code();
+          r.preset = "reference_code";
         } else {
-          throw Error("unknown VCAR variant '" + r.variant + "' (vcar:paper or vcar:robust)", "--methods");
+          throw Error("unknown VCAR variant '" + r.variant + "' (vcar:paper, vcar:robust or vcar:code)", "--methods");
         }
         CachedCoarse cached(seg.fn, names, by_frame);
         LastRenders renderer(renderer_);
@@ -707,14 +754,16 @@ int main(int argc, char** argv) {
     else if (a == "--methods") o.methods = split(value());
     else if (a == "--set") o.set.push_back(value());
     else if (a == "--sam") o.sam.push_back(value());
+    else if (a == "--isnet") o.isnet = value();
     else if (a == "--width") o.width = std::stoi(value());
     else if (a == "--height") o.height = std::stoi(value());
     else {
       std::fprintf(stderr, "usage: %s [--quick] [--out DIR] [--stage FILE] [--seeds tuning|heldout|all|N,N,...] "
-                           "[--targets a,b] [--rigs forward,orbit] [--segmenters grabcut,oracle,oracle-sam] "
-                           "[--methods vcar:paper,vcar:robust,naive,sagd,flashsplat,gaussiancut,ludvig,lbg] "
+                           "[--targets a,b] [--rigs forward,orbit] [--segmenters grabcut,oracle,oracle-sam,oracle-sam-nodrift] "
+                           "[--methods vcar:paper,vcar:robust,vcar:code,naive,sagd,flashsplat,gaussiancut,ludvig,lbg] "
                            "[--width W --height H] [--set key=value]... (vcar:robust only) "
-                           "[--sam key=value]... (oracle-sam's levels: p_wrong, p_part, p_leak, leak_px, drift_px)\n", argv[0]);
+                           "[--sam key=value]... (oracle-sam's levels: p_wrong, p_part, p_leak, leak_px, drift_px) "
+                           "[--isnet CMD] (the isnet segmenter's program)\n", argv[0]);
       return a == "--help" || a == "-h" ? 0 : 2;
     }
   }

@@ -25,14 +25,17 @@ plt.rcParams["svg.fonttype"] = "none"  # text stays text (smaller, diff-able)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PEERS = ["naive", "sagd", "flashsplat", "gaussiancut", "ludvig", "lbg"]
-METHODS = ["vcar:paper", "vcar:robust"] + PEERS
-SEGMENTERS = ["grabcut", "oracle", "oracle-sam"]
+METHODS = ["vcar:paper", "vcar:robust", "vcar:code"] + PEERS
+SEGMENTERS = ["grabcut", "isnet", "oracle", "oracle-sam-nodrift", "oracle-sam"]
 RIGS = ["forward", "orbit"]
 NUM = {"seed", "gaussians", "object_gaussians", "width", "height", "n_train", "n_eval", "miou", "macc", "miou_01",
        "boundary_iou", "boundary_f1", "f1_3d", "precision_3d", "recall_3d", "selected", "t_render", "t_segment",
        "t_method", "time_s", "frames_segmented", "n_coarse", "n_fine", "mask_iou", "mask_none", "mask_frames"}
-LABEL = {"vcar:paper": "VCAR, paper preset", "vcar:robust": "vcar default (robust)"}
-SEG_LABEL = {"grabcut": "GrabCut", "oracle": "oracle (rendered)", "oracle-sam": "oracle + SAM-like failures"}
+LABEL = {"vcar:paper": "VCAR, paper preset", "vcar:robust": "vcar default (robust)",
+         "vcar:code": "VCAR, released code's preset"}
+SEG_LABEL = {"grabcut": "GrabCut", "isnet": "ISNet", "oracle": "oracle (rendered)",
+             "oracle-sam-nodrift": "oracle + SAM-like failures, no drift",
+             "oracle-sam": "oracle + SAM-like failures with drift"}
 
 
 def load(path):
@@ -183,6 +186,7 @@ for i, k in enumerate(PEERS):
     STYLE[k] = dict(color=_colours[i % len(_colours)], marker="os^vD<>ph*"[i])
 STYLE["vcar:paper"] = dict(color="black", marker="*")
 STYLE["vcar:robust"] = dict(color="crimson", marker="*")
+STYLE["vcar:code"] = dict(color="grey", marker="P")
 
 
 def chart(rows, metric, name, ylabel):
@@ -199,10 +203,14 @@ def chart(rows, metric, name, ylabel):
             vals = [r[metric] for r in rs if r["key"] == m]
             pts.append((i, m, median(r["time_s"] for r in rs if r["key"] == m), mean(vals), min(vals), max(vals)))
     floor = max(0.0, min([p[4] for p in pts if p[3] >= 0.5] or [0.0]) - 0.03)
-    fig, axes = plt.subplots(1, len(cs), figsize=(4.2 * len(cs), 3.9), sharey=True, squeeze=False)
+    ncol = min(4, len(cs))
+    nrow = (len(cs) + ncol - 1) // ncol
+    fig, axes = plt.subplots(nrow, ncol, figsize=(4.2 * ncol, 3.9 * nrow), sharey=True, squeeze=False)
+    for i in range(len(cs), nrow * ncol):
+        axes[i // ncol][i % ncol].set_visible(False)
     handles = {}
     for i, (seg, rig) in enumerate(cs):
-        ax = axes[0][i]
+        ax = axes[i // ncol][i % ncol]
         for _, m, t, mu, lo, hi in [p for p in pts if p[0] == i]:
             if mu < floor:
                 ax.scatter([t], [floor + 0.004], s=36, zorder=3, color=STYLE[m]["color"], marker="v")
@@ -219,11 +227,12 @@ def chart(rows, metric, name, ylabel):
         ax.set_title("%s, %s\n(masks' 2D IoU %s)" % (SEG_LABEL[seg], rig, fmt(iou)), fontsize=9)
         ax.set_xlabel("time per run, segmenter included (s, log)", fontsize=8)
         ax.grid(alpha=0.3, which="both")
-    axes[0][0].set_ylabel(ylabel)
+    for row in axes:
+        row[0].set_ylabel(ylabel)
     axes[0][0].set_ylim(bottom=floor)
     order = [m for m in METHODS if m in handles]
     fig.legend([handles[m] for m in order], [label(m) for m in order], loc="lower center", ncol=len(order),
-               fontsize=8, bbox_to_anchor=(0.5, -0.06), frameon=False)
+               fontsize=8, bbox_to_anchor=(0.5, -0.06 / nrow), frameon=False)
     out = os.path.join(ROOT, "docs", "figures", name)
     fig.savefig(out, format="svg", metadata={"Date": None}, bbox_inches="tight")
     plt.close(fig)

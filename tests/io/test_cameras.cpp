@@ -51,3 +51,15 @@ TEST_CASE("read_cameras: unknown formats are named") {
   write_bytes(tmp / "x.yaml", "a: 1");
   require_error([&] { vcar::io::read_cameras(tmp / "x.yaml"); }, {"x.yaml", "unknown camera format"});
 }
+
+TEST_CASE("read_cameras from bytes: both JSON formats by content, errors name the given name") {
+  TempDir tmp;
+  const auto cams = two();
+  auto bytes_of = [](const std::string& s) { return std::vector<std::uint8_t>(s.begin(), s.end()); };
+  vcar::io::write_transforms_json(tmp / "t.json", cams);
+  vcar::io::write_cameras_json(tmp / "c.json", cams);
+  same(vcar::io::read_cameras(bytes_of(vcar_test::read_bytes(tmp / "t.json")), "upload.json"), cams);
+  same(vcar::io::read_cameras(bytes_of(vcar_test::read_bytes(tmp / "c.json")), "upload.json"), cams);
+  require_error([&] { vcar::io::read_cameras(bytes_of(R"({"a": 1})"), "up.json"); }, {"up.json", "neither"});
+  require_error([&] { vcar::io::read_cameras(bytes_of("[{"), "bad.json"); }, {"bad.json", "malformed JSON"});
+}

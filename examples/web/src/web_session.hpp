@@ -5,8 +5,9 @@
 //
 // Flow: load_scene(bytes) -> load_cameras(bytes) (optional) -> segment(reference, click) ->
 // indices / scores / log-scales -> object_ply / removed_ply / state_ply (bytes).
-// Files are read and written through a scratch folder (emscripten's in-memory file system in the
-// browser), because vcar::io reads by path and decides the format by content.
+// Scenes and cameras are read from bytes (vcar::io's readers take both); the PLY downloads are
+// written through a scratch folder (emscripten's in-memory file system in the browser), because
+// vcar::io's writers write files.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -78,19 +79,9 @@ public:
   // Any format vcar::io::read_scene reads (by content; `name` matters only for .splat).
   // SPZ v2/v3 may also come already gunzipped (the browser inflates with DecompressionStream).
   std::size_t load_scene(const std::vector<std::uint8_t>& bytes, const std::string& name) {
-    const auto path = dir_ / ("scene" + std::filesystem::path(name).extension().string());
-    write_file(path, bytes);
-    if (bytes.size() >= 16 && io::detail::load_u32(bytes.data()) == io::spz_magic &&
-        io::detail::load_u32(bytes.data() + 4) < 4) {
-      const io::detail::SpzHeader h = io::detail::check_spz_header(bytes.data(), name);
-      scene_ = io::detail::decode_spz_arrays(h, bytes.data() + 16, -1.f, 1.f, name);
-      format_ = io::SceneFormat::spz;
-    } else {
-      InfiniteOpacities infinite;
-      scene_ = io::read_scene(path, &format_, &infinite);
-      if (infinite.total()) std::fprintf(stderr, "vcar: warning: %s: %s\n", name.c_str(), infinite.message().c_str());
-    }
-    std::filesystem::remove(path);
+    InfiniteOpacities infinite;
+    scene_ = io::read_scene(bytes, name, &format_, &infinite);
+    if (infinite.total()) std::fprintf(stderr, "vcar: warning: %s: %s\n", name.c_str(), infinite.message().c_str());
     if (scene_.empty()) throw Error("the scene has no Gaussians", name);
     result_.reset();
     return scene_.size();
@@ -98,10 +89,7 @@ public:
 
   // cameras.json (Inria) or transforms.json (nerfstudio/Blender with w, h).
   std::size_t load_cameras(const std::vector<std::uint8_t>& bytes, const std::string& name) {
-    const auto path = dir_ / (std::filesystem::path(name).extension() == ".json" ? "cameras.json" : name);
-    write_file(path, bytes);
-    cameras_ = io::read_cameras(path);
-    std::filesystem::remove(path);
+    cameras_ = io::read_cameras(bytes, name);
     for (const Camera& c : cameras_) c.validate();
     return cameras_.size();
   }
@@ -272,11 +260,6 @@ private:
   static float median(std::vector<float> v) {
     std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
     return v[v.size() / 2];
-  }
-  static void write_file(const std::filesystem::path& p, const std::vector<std::uint8_t>& b) {
-    std::ofstream o(p, std::ios::binary);
-    o.write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
-    if (!o) throw Error("cannot write scratch file", p.string());
   }
   template <class F>
   std::vector<std::uint8_t> write_and_read(F&& write) {

@@ -17,9 +17,10 @@
 //
 // State: the voter (Morton-sorted means and counters, ~20 bytes per Gaussian), the masks
 // run-length encoded (O(boundary) bytes each) and the last refinement (~90 bytes per selected
-// Gaussian). The vote is the paper's (Eq. 1-3): parameters
-// of the robust vote (edge band, occlusion tests, keep_unseen, foreshortening, undershoot band)
-// are refused: its levels are not yet taken back view by view.
+// Gaussian). The vote is the paper's (Eq. 1-3): the robust vote's parameters (VcarParams::
+// robust_vote(): the occlusion tests R3, foreshortening R5, the undershoot band R6, view
+// reliability R13) are refused: they need renders, and their levels are not taken back view by
+// view.
 #include <cstddef>
 #include <memory>
 #include <optional>
@@ -48,8 +49,8 @@ public:
         abr_masks_(cameras_.size()) {
     params_.validate();
     if (params_.robust_vote())
-      throw Error("re-selection votes with Eq. 1-3 only; the robust vote (edge_band, coarse/fine_occlusion, "
-                  "keep_unseen, foreshortening, undershoot_band) needs renders and is not incremental (use a "
+      throw Error("re-selection votes with Eq. 1-3 only; the robust vote (coarse_occlusion, fine_occlusion, "
+                  "foreshortening, undershoot_band, view_reliability) needs renders and is not incremental (use a "
                   "paper preset such as VcarParams::nvos(), or vcar::segment)", "Reselection");
     if (params_.occlusion_aware) throw Error("occlusion_aware needs renders (use vcar::segment)", "Reselection");
     if (scene.empty()) throw Error("the scene has no Gaussians", "scene");

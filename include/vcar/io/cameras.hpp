@@ -4,7 +4,10 @@
 //   a folder with transforms.json or cameras.json -> that file;
 //   a .json file: an array -> Inria cameras.json, an object with `frames` -> transforms.json;
 //   a COLMAP cameras.* / images.* file -> the model in its folder.
+// From bytes in memory (a browser's upload): the two JSON formats, told apart by content.
+#include <cstdint>
 #include <filesystem>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -42,6 +45,16 @@ inline std::vector<Camera> read_cameras(const std::filesystem::path& path) {
     throw Error("JSON is neither an Inria cameras.json (array) nor a transforms.json (frames)", where);
   }
   throw Error("unknown camera format (expected a COLMAP folder, cameras.json or transforms.json)", where);
+}
+
+// The cameras of a JSON file's bytes in memory: an array -> Inria cameras.json, an object with
+// `frames` -> transforms.json. `name` stands for the file in errors. (COLMAP models are two
+// files: read them from a folder.)
+inline std::vector<Camera> read_cameras(std::span<const std::uint8_t> bytes, const std::string& name) {
+  const nlohmann::json j = parse_json_bytes(bytes, name);
+  if (j.is_array()) return detail::cameras_from_inria_json(j, name);
+  if (j.is_object() && j.contains("frames")) return detail::cameras_from_transforms(j, name);
+  throw Error("JSON is neither an Inria cameras.json (array) nor a transforms.json (frames)", name);
 }
 
 }  // namespace vcar::io

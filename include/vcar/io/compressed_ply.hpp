@@ -22,11 +22,14 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <istream>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "vcar/core/error.hpp"
 #include "vcar/core/gaussian_scene.hpp"
+#include "vcar/io/byte_stream.hpp"
 #include "vcar/io/compact_values.hpp"
 #include "vcar/io/ply.hpp"
 
@@ -71,13 +74,8 @@ struct CompressedPly {
   std::vector<std::uint8_t> sh;          // sh_rest per Gaussian, f_rest order
 };
 
-inline CompressedPly read_compressed_ply_raw(const std::filesystem::path& path) {
-  const std::string where = path.string();
-  std::error_code ec;
-  const std::uint64_t file_size = std::filesystem::file_size(path, ec);
-  if (ec) throw Error("cannot open compressed PLY file: " + ec.message(), where);
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error("cannot open compressed PLY file", where);
+// The packed columns of a compressed PLY on a stream of `file_size` bytes; `where` names it.
+inline CompressedPly read_compressed_ply_raw(std::istream& in, std::uint64_t file_size, const std::string& where) {
   const PlyHeader h = parse_ply_header(in, where);
   if (!h.binary) throw Error("compressed PLY must be binary_little_endian", where);
 
@@ -173,12 +171,18 @@ inline CompressedPly read_compressed_ply_raw(const std::filesystem::path& path) 
   return c;
 }
 
-}  // namespace detail
-
-// Reads a PlayCanvas compressed PLY (see the top of this file).
-inline GaussianScene read_compressed_ply(const std::filesystem::path& path) {
+inline CompressedPly read_compressed_ply_raw(const std::filesystem::path& path) {
   const std::string where = path.string();
-  const detail::CompressedPly c = detail::read_compressed_ply_raw(path);
+  std::error_code ec;
+  const std::uint64_t file_size = std::filesystem::file_size(path, ec);
+  if (ec) throw Error("cannot open compressed PLY file: " + ec.message(), where);
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error("cannot open compressed PLY file", where);
+  return read_compressed_ply_raw(in, file_size, where);
+}
+
+// The scene of unpacked columns `c` (see the top of this file); `where` names the file.
+inline GaussianScene unpack_compressed_ply(const CompressedPly& c, const std::string& where) {
   const int degree = c.sh_rest == 45 ? 3 : c.sh_rest == 24 ? 2 : c.sh_rest == 9 ? 1 : 0;
   GaussianScene s;
   s.resize(c.n, degree);
@@ -218,6 +222,19 @@ inline GaussianScene read_compressed_ply(const std::filesystem::path& path) {
   }
   s.validate(where);
   return s;
+}
+
+}  // namespace detail
+
+// Reads a PlayCanvas compressed PLY (see the top of this file).
+inline GaussianScene read_compressed_ply(const std::filesystem::path& path) {
+  return detail::unpack_compressed_ply(detail::read_compressed_ply_raw(path), path.string());
+}
+
+// The same from the file's bytes in memory; `name` stands for the file in errors.
+inline GaussianScene read_compressed_ply(std::span<const std::uint8_t> bytes, const std::string& name) {
+  detail::ByteStream in(bytes);
+  return detail::unpack_compressed_ply(detail::read_compressed_ply_raw(in, bytes.size(), name), name);
 }
 
 }  // namespace vcar::io

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <span>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -21,6 +22,15 @@ inline nlohmann::json read_json_file(const std::filesystem::path& path) {
     return nlohmann::json::parse(in);
   } catch (const nlohmann::json::exception& e) {
     throw Error(std::string("malformed JSON: ") + e.what(), path.string());
+  }
+}
+
+// JSON from a file's bytes in memory; `name` stands for the file in errors.
+inline nlohmann::json parse_json_bytes(std::span<const std::uint8_t> bytes, const std::string& name) {
+  try {
+    return nlohmann::json::parse(bytes.begin(), bytes.end());
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(std::string("malformed JSON: ") + e.what(), name);
   }
 }
 

@@ -29,6 +29,7 @@
 #include <istream>
 #include <limits>
 #include <ostream>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -36,6 +37,7 @@
 #include "vcar/core/error.hpp"
 #include "vcar/core/gaussian_scene.hpp"
 #include "vcar/io/atomic_file.hpp"
+#include "vcar/io/byte_stream.hpp"
 
 namespace vcar::io {
 
@@ -329,14 +331,10 @@ inline void check_writable(const std::filesystem::path& path, const GaussianScen
 
 }  // namespace detail
 
-// Reads an Inria 3DGS PLY (see the top of this file for what is accepted and kept).
-inline GaussianScene read_ply(const std::filesystem::path& path, InfiniteOpacities* infinite = nullptr) {
-  const std::string where = path.string();
-  std::error_code ec;
-  const std::uint64_t file_size = std::filesystem::file_size(path, ec);
-  if (ec) throw Error("cannot open PLY file: " + ec.message(), where);
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error("cannot open PLY file", where);
+namespace detail {
+// read_ply on a stream of `file_size` bytes (a file or bytes in memory); `where` names it.
+inline GaussianScene read_ply_stream(std::istream& in, std::uint64_t file_size, const std::string& where,
+                                     InfiniteOpacities* infinite) {
   const detail::PlyHeader h = detail::parse_ply_header(in, where);
 
   // Skip the elements before `vertex` (fixed-size rows only).
@@ -475,6 +473,25 @@ inline GaussianScene read_ply(const std::filesystem::path& path, InfiniteOpaciti
   if (infinite) *infinite = settled;
   scene.validate(where);
   return scene;
+}
+}  // namespace detail
+
+// Reads an Inria 3DGS PLY (see the top of this file for what is accepted and kept).
+inline GaussianScene read_ply(const std::filesystem::path& path, InfiniteOpacities* infinite = nullptr) {
+  const std::string where = path.string();
+  std::error_code ec;
+  const std::uint64_t file_size = std::filesystem::file_size(path, ec);
+  if (ec) throw Error("cannot open PLY file: " + ec.message(), where);
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error("cannot open PLY file", where);
+  return detail::read_ply_stream(in, file_size, where, infinite);
+}
+
+// The same from the file's bytes in memory; `name` stands for the file in errors.
+inline GaussianScene read_ply(std::span<const std::uint8_t> bytes, const std::string& name,
+                              InfiniteOpacities* infinite = nullptr) {
+  detail::ByteStream in(bytes);
+  return detail::read_ply_stream(in, bytes.size(), name, infinite);
 }
 
 // Writes every Gaussian of `scene` (atomic: temp file + rename).

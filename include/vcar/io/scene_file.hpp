@@ -9,10 +9,13 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <istream>
+#include <span>
 #include <string>
 
 #include "vcar/core/error.hpp"
 #include "vcar/core/gaussian_scene.hpp"
+#include "vcar/io/byte_stream.hpp"
 #include "vcar/io/compressed_ply.hpp"
 #include "vcar/io/ply.hpp"
 #include "vcar/io/splat_file.hpp"
@@ -40,6 +43,25 @@ inline std::string lower_extension(const std::filesystem::path& p) {
 }
 }  // namespace detail
 
+namespace detail {
+// The format from the first bytes `head` (got of them) of a stream holding the whole file;
+// `in` is read again (from its start) for a PLY header. `name` decides only for .splat.
+inline SceneFormat scene_format_of(const unsigned char* head, std::size_t got, std::istream& in,
+                                   const std::filesystem::path& name, const std::string& where) {
+  if (got >= 4 && head[0] == 'p' && head[1] == 'l' && head[2] == 'y' && (head[3] == '\n' || head[3] == '\r')) {
+    in.clear();
+    in.seekg(0);
+    const PlyHeader h = parse_ply_header(in, where);
+    return is_compressed_ply_header(h) ? SceneFormat::compressed_ply : SceneFormat::ply;
+  }
+  if (got >= 2 && head[0] == 0x1f && head[1] == 0x8b) return SceneFormat::spz;
+  if (got >= 4 && load_u32(head) == spz_magic) return SceneFormat::spz;
+  if (lower_extension(name) == ".splat") return SceneFormat::splat;
+  throw Error("unrecognised scene file: not a PLY (first line 'ply'), not SPZ (gzip or NGSP magic); antimatter15 "
+              "files have no signature and must be named *.splat", where);
+}
+}  // namespace detail
+
 // The format of a scene file, from its first bytes (and the .splat extension when they match no
 // signature). Throws vcar::Error naming the file when it is none of the four.
 inline SceneFormat detect_scene_format(const std::filesystem::path& path) {
@@ -49,18 +71,14 @@ inline SceneFormat detect_scene_format(const std::filesystem::path& path) {
   if (!in || !std::filesystem::is_regular_file(path, ec)) throw Error("cannot open scene file", where);
   unsigned char head[4] = {0, 0, 0, 0};
   in.read(reinterpret_cast<char*>(head), 4);
-  const std::size_t got = static_cast<std::size_t>(in.gcount());
-  if (got >= 4 && head[0] == 'p' && head[1] == 'l' && head[2] == 'y' && (head[3] == '\n' || head[3] == '\r')) {
-    in.clear();
-    in.seekg(0);
-    const detail::PlyHeader h = detail::parse_ply_header(in, where);
-    return detail::is_compressed_ply_header(h) ? SceneFormat::compressed_ply : SceneFormat::ply;
-  }
-  if (got >= 2 && head[0] == 0x1f && head[1] == 0x8b) return SceneFormat::spz;
-  if (got >= 4 && detail::load_u32(head) == spz_magic) return SceneFormat::spz;
-  if (detail::lower_extension(path) == ".splat") return SceneFormat::splat;
-  throw Error("unrecognised scene file: not a PLY (first line 'ply'), not SPZ (gzip or NGSP magic); antimatter15 "
-              "files have no signature and must be named *.splat", where);
+  return detail::scene_format_of(head, static_cast<std::size_t>(in.gcount()), in, path, where);
+}
+
+// The same for a file's bytes in memory; `name` is the file's name (its extension decides for
+// .splat) and stands for it in errors.
+inline SceneFormat detect_scene_format(std::span<const std::uint8_t> bytes, const std::string& name) {
+  detail::ByteStream in(bytes);
+  return detail::scene_format_of(bytes.data(), std::min<std::size_t>(bytes.size(), 4), in, name, name);
 }
 
 // Reads any of the four formats (docs/formats.md); `format`, when given, receives what was read,
@@ -78,6 +96,23 @@ inline GaussianScene read_scene(const std::filesystem::path& path, SceneFormat* 
     case SceneFormat::splat: return read_splat(path);
   }
   throw Error("unknown scene format", path.string());
+}
+
+// The same from a file's bytes in memory (a browser's upload, a network buffer); `name` is the
+// file's name (its extension decides for .splat) and stands for it in errors. SPZ v2/v3 may
+// also come already inflated (the header and arrays without their gzip stream).
+inline GaussianScene read_scene(std::span<const std::uint8_t> bytes, const std::string& name,
+                                SceneFormat* format = nullptr, InfiniteOpacities* infinite = nullptr) {
+  const SceneFormat f = detect_scene_format(bytes, name);
+  if (format) *format = f;
+  if (infinite) *infinite = {};
+  switch (f) {
+    case SceneFormat::ply: return read_ply(bytes, name, infinite);
+    case SceneFormat::compressed_ply: return read_compressed_ply(bytes, name);
+    case SceneFormat::spz: return read_spz(bytes, name);
+    case SceneFormat::splat: return read_splat(bytes, name);
+  }
+  throw Error("unknown scene format", name);
 }
 
 // Writes by extension: .splat, .spz, otherwise Inria PLY (binary). Compressed PLY is not written.

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <limits>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -55,6 +56,11 @@ inline GaussianScene decode_splat(const std::uint8_t* data, std::size_t size, co
 inline GaussianScene read_splat(const std::filesystem::path& path) {
   const std::vector<std::uint8_t> bytes = detail::read_whole_file(path, ".splat file");
   return decode_splat(bytes.data(), bytes.size(), path.string());
+}
+
+// The same from the file's bytes in memory; `name` stands for the file in errors.
+inline GaussianScene read_splat(std::span<const std::uint8_t> bytes, const std::string& name) {
+  return decode_splat(bytes.data(), bytes.size(), name);
 }
 
 // The .splat bytes of `scene` (every Gaussian, in scene order).

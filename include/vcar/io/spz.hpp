@@ -202,9 +202,19 @@ inline GaussianScene decode_spz(const std::uint8_t* data, std::size_t size, cons
     const std::vector<std::uint8_t> all = gunzip(data, size, total, true, where);
     return decode_spz_arrays(h, all.data() + 16, -1.f, 1.f, where);
   }
+  if (size >= 16 && load_u32(data) == spz_magic && load_u32(data + 4) < 4) {  // v2, v3 already inflated
+    const SpzHeader h = check_spz_header(data, where);
+    if (h.flags & spz_flag_extensions)
+      throw Error("SPZ v" + std::to_string(h.version) + " with extension records is not supported (re-save as SPZ v4)", where);
+    std::uint64_t total = 16;
+    for (auto b : spz_array_bytes(h.version, h.sh_degree)) total += b * h.n;
+    if (total > size)
+      throw Error("header declares " + std::to_string(h.n) + " Gaussians (" + std::to_string(total) + " bytes) but the " +
+                  std::to_string(size) + " bytes hold fewer (truncated?)", where);
+    return decode_spz_arrays(h, data + 16, -1.f, 1.f, where);
+  }
   if (size < 32) throw Error("not an SPZ file (" + std::to_string(size) + " bytes, neither gzip nor a 32-byte NGSP header)", where);
   const SpzHeader h = check_spz_header(data, where);
-  if (h.version < 4) throw Error("SPZ version " + std::to_string(h.version) + " must be gzip-compressed", where);
   const std::uint32_t streams = data[15], toc = load_u32(data + 16);
   const auto per = spz_array_bytes(h.version, h.sh_degree);
   std::uint32_t wanted = 0;
@@ -264,6 +274,11 @@ inline GaussianScene decode_spz(const std::uint8_t* data, std::size_t size, cons
 inline GaussianScene read_spz(const std::filesystem::path& path) {
   const std::vector<std::uint8_t> bytes = detail::read_whole_file(path, "SPZ file");
   return decode_spz(bytes.data(), bytes.size(), path.string());
+}
+
+// The same from the file's bytes in memory; `name` stands for the file in errors.
+inline GaussianScene read_spz(std::span<const std::uint8_t> bytes, const std::string& name) {
+  return decode_spz(bytes.data(), bytes.size(), name);
 }
 
 // The v3 payload (header + arrays, before gzip) of `scene`; throws if a position does not fit
