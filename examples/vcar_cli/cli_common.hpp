@@ -1,6 +1,6 @@
 #pragma once
-// Shared pieces of the `vcar` program: exit codes, the terminal progress line, Ctrl-C,
-// selection files and small parsers. Every error names the file, view or parameter at fault.
+// Shared pieces of the `vcar` program: exit codes, the terminal progress line, Ctrl-C and small
+// parsers. Every error names the file, view or parameter at fault.
 #include <atomic>
 #include <chrono>
 #include <string_view>
@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "vcar/io/external_segmenter.hpp"
+#include "vcar/io/selection_file.hpp"
 #include "vcar/io/selection_identity.hpp"
 #include "vcar/algo/params.hpp"
 #include "vcar/algo/pipeline.hpp"
@@ -99,36 +100,12 @@ private:
   bool committed_ = false;
 };
 
-// selection.json: {"indices": [...ascending], "scores": [...], "log_scales": [[l0,l1,l2], ...],
-// "scene_gaussians": n, "identity": {"scene": {"gaussians", "ordered", "unordered"},
-// "gaussians": [hex, ...]}}. Scores, log_scales and identity.gaussians are aligned with indices;
-// the identity (io/selection_identity.hpp) says which Gaussians of which scene were selected.
-struct Selection {
-  std::vector<Index> indices;
-  std::vector<float> scores;
-  LogScales log_scale;        // empty columns: the scene's own scales
-  std::size_t scene_gaussians = 0;  // 0 = unknown
-  std::optional<io::SelectionIdentity> identity;  // absent in files of vcar before 0.2
-  bool has_log_scales() const { return !log_scale[0].empty(); }
-};
-nlohmann::json selection_json(const Selection& s);
-// Reads and checks a selection: selection.json, or a state PLY (`vcar segment --state-ply`, or
-// saved by SuperSplat: the Gaussians flagged selected and not deleted). With `scene`, applies it
-// to that scene: by identity, so a re-sorted copy of the selection's scene gets the same
-// Gaussians (indices, scores and scales re-ordered to match) and any other scene is refused
-// (exit 2, saying why); a file without identity is applied by index after a size check.
-// A selection.json of several objects (`segment --prompts`: "objects": [{"name", "object_id",
-// "indices", ...}]) reads as the union of its objects.
-Selection read_selection(const std::filesystem::path& file, const GaussianScene* scene = nullptr);
-
-// Each object of a selection.json of several objects, applied to `scene` like read_selection; a
-// one-object file (or state PLY) gives one entry named "".
-struct ObjectSelection {
-  std::string name;
-  int object_id = -1;  // the synthetic world's object, when the prompts named it
-  Selection selection;
-};
-std::vector<ObjectSelection> read_object_selections(const std::filesystem::path& file, const GaussianScene* scene = nullptr);
+// selection.json and state PLYs as selections: io/selection_file.hpp.
+using io::ObjectSelection;
+using io::read_object_selections;
+using io::read_selection;
+using io::Selection;
+using io::selection_json;
 
 // ---- parsing -------------------------------------------------------------------------------
 // "u,v;u,v,0": points, label 1 unless a third value says 0 (negative). Errors name `where`.
