@@ -14,6 +14,7 @@
 
 #include "vcar/core/parallel.hpp"
 #include "vcar/io/atomic_file.hpp"
+#include "vcar/io/diagnostics_json.hpp"
 #include "vcar/io/json_file.hpp"
 #include "vcar/io/params_text.hpp"
 #include "vcar/io/ply.hpp"
@@ -328,39 +329,13 @@ nlohmann::json write_segmentation(const std::filesystem::path& out, const Gaussi
   sel.identity = io::selection_identity(io::gaussian_identities(scene), r.indices);
   write_json(out / "selection.json", selection_json(sel));
 
-  nlohmann::json timings = nlohmann::json::object();
-  for (const auto& [stage, s] : d.timings_s) timings[stage] = s;
-  nlohmann::json sampled = nlohmann::json::array();
-  for (const Camera& c : d.sampled_cameras) {
-    const Eigen::Vector3f p = c.position();
-    sampled.push_back({p.x(), p.y(), p.z()});
-  }
-  nlohmann::json report = {
-      {"inputs", inputs},
-      {"parameters", params_json(params)},
-      {"counts", {{"scene", scene.size()}, {"coarse", d.n_coarse}, {"fine", d.n_fine},
-                  {"final", d.n_final}, {"removed", rest.size()}}},
-      {"valid_cameras", d.valid_cameras},
-      {"max_gap_deg", d.max_gap_deg},
-      {"gap_direction", {d.gap_direction.x(), d.gap_direction.y(), d.gap_direction.z()}},
-      {"sss_triggered", d.sss_triggered},
-      {"tau_fine_applied", d.tau_fine_applied},
-      {"undershoot_applied", d.undershoot_applied},
-      {"sphere", {{"center", {d.sphere.c.x(), d.sphere.c.y(), d.sphere.c.z()}}, {"radius", d.sphere.r},
-                  {"inliers", d.sphere.inliers}}},
-      {"sampled_views", d.sampled_cameras.size()},
-      {"sampled_positions", sampled},
-      {"abr", {{"flagged", d.abr_flagged}, {"compressed", d.abr_compressed}, {"retraced", d.abr_retraced}, {"masks_widened", d.abr_masks_widened}}},
-      {"coplanar_dropped", d.coplanar_dropped},
-      {"overshoot_eroded", d.overshoot_eroded},
-      {"masks_grown", d.masks_grown},
-      {"masks_missing", d.masks_missing},
-      {"note", d.note},
-      {"timings_s", timings},
-      {"threads", max_threads()},
-      {"peak_rss_mib", peak_rss_mib()},
-      {"outputs", {{"object", "object.ply"}, {"removed", "removed.ply"}, {"selection", "selection.json"}}},
-  };
+  nlohmann::json report = io::diagnostics_json(d);  // counts, view completeness, ABR, rules, timings
+  report["inputs"] = inputs;
+  report["parameters"] = params_json(params);
+  report["counts"]["removed"] = rest.size();
+  report["threads"] = max_threads();
+  report["peak_rss_mib"] = peak_rss_mib();
+  report["outputs"] = {{"object", "object.ply"}, {"removed", "removed.ply"}, {"selection", "selection.json"}};
   write_json(out / "report.json", report);
   return report;
 }

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_common.hpp"
+#include "vcar/io/diagnostics_json.hpp"
 #include "commands.hpp"
 #include "input_checks.hpp"
 #include "multi_segment.hpp"
@@ -246,19 +247,12 @@ int run_segment_objects(const SegmentOptions& o, const GlobalOptions& g) {
     sj["name"] = objects[k].name;
     if (objects[k].object_id >= 0) sj["object_id"] = objects[k].object_id;
     sel_objects.push_back(std::move(sj));
-    const Diagnostics& d = r.diagnostics;
-    nlohmann::json timings = nlohmann::json::object();
-    for (const auto& [stage, s] : d.timings_s) timings[stage] = s;
-    rep_objects.push_back({{"name", objects[k].name}, {"reference_view", cams[objects[k].prompt.reference_view].name},
-                           {"counts", {{"coarse", d.n_coarse}, {"fine", d.n_fine}, {"final", d.n_final}, {"lost_to_others", result.lost[k]}}},
-                           {"valid_cameras", d.valid_cameras}, {"max_gap_deg", d.max_gap_deg}, {"sss_triggered", d.sss_triggered},
-                           {"tau_fine_applied", d.tau_fine_applied}, {"undershoot_applied", d.undershoot_applied},
-                           {"sampled_views", d.sampled_cameras.size()},
-                           {"abr", {{"flagged", d.abr_flagged}, {"compressed", d.abr_compressed}, {"retraced", d.abr_retraced}, {"masks_widened", d.abr_masks_widened}}},
-                           {"coplanar_dropped", d.coplanar_dropped}, {"overshoot_eroded", d.overshoot_eroded},
-                           {"masks_grown", d.masks_grown},
-                           {"masks_missing", d.masks_missing}, {"note", d.note}, {"timings_s", timings},
-                           {"output", "objects/" + objects[k].name + ".ply"}});
+    nlohmann::json rep = io::diagnostics_json(r.diagnostics);  // io/diagnostics_json.hpp, as report.json
+    rep["name"] = objects[k].name;
+    rep["reference_view"] = cams[objects[k].prompt.reference_view].name;
+    rep["counts"]["lost_to_others"] = result.lost[k];
+    rep["output"] = "objects/" + objects[k].name + ".ply";
+    rep_objects.push_back(std::move(rep));
   }
   std::sort(all.begin(), all.end());
   std::vector<Index> union_idx, rest;

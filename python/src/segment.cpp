@@ -7,6 +7,11 @@
 // and stages, runs Python's signal handlers (KeyboardInterrupt stops the pipeline the same way).
 #include <pybind11/stl.h>
 
+#include <string>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
 #include "common.hpp"
 #include "params.hpp"
 #include "result.hpp"
@@ -309,37 +314,27 @@ py::dict result_dict(SegmentationResult&& r, const VcarParams& params) {
   r.scores.resize(static_cast<std::size_t>(m));
   out["scores"] = adopt(std::move(r.scores), {m});
   out["log_scales"] = ls;
-  const Diagnostics& g = r.diagnostics;
-  py::dict d;
-  d["n_scene"] = g.n_scene;
-  d["n_coarse"] = g.n_coarse;
-  d["n_fine"] = g.n_fine;
-  d["n_final"] = g.n_final;
-  d["valid_cameras"] = g.valid_cameras;
-  d["max_gap_deg"] = g.max_gap_deg;
-  d["gap_direction"] = vec3_array(g.gap_direction);
-  d["sss_triggered"] = g.sss_triggered;
-  d["tau_fine_applied"] = g.tau_fine_applied;
-  d["undershoot_applied"] = g.undershoot_applied;
-  d["sampled_cameras"] = camera_list(g.sampled_cameras);
-  py::dict sphere;
-  sphere["center"] = vec3_array(g.sphere.c);
-  sphere["radius"] = g.sphere.r;
-  sphere["inliers"] = g.sphere.inliers;
-  d["sphere"] = sphere;
-  d["abr_flagged"] = g.abr_flagged;
-  d["abr_compressed"] = g.abr_compressed;
-  d["abr_retraced"] = g.abr_retraced;
-  d["abr_masks_widened"] = g.abr_masks_widened;
-  d["coplanar_dropped"] = g.coplanar_dropped;
-  d["overshoot_eroded"] = g.overshoot_eroded;
-  d["masks_grown"] = g.masks_grown;
-  d["masks_missing"] = g.masks_missing;
-  d["mask_store_bytes"] = g.mask_store_bytes;
-  d["note"] = g.note;
-  py::dict t;
-  for (const auto& [stage, s] : g.timings_s) t[py::str(stage)] = s;
-  d["timings_s"] = t;
+  py::dict d;  // every field of Diagnostics::for_each_field, by its declared name
+  Diagnostics::for_each_field(r.diagnostics, [&](const char* name, const char*, const auto& v) {
+    using T = std::decay_t<decltype(v)>;
+    if constexpr (std::is_same_v<T, Eigen::Vector3f>) {
+      d[name] = vec3_array(v);
+    } else if constexpr (std::is_same_v<T, std::vector<Camera>>) {
+      d[name] = camera_list(v);
+    } else if constexpr (std::is_same_v<T, ObjectSphere>) {
+      py::dict sphere;
+      sphere["center"] = vec3_array(v.c);
+      sphere["radius"] = v.r;
+      sphere["inliers"] = v.inliers;
+      d[name] = sphere;
+    } else if constexpr (std::is_same_v<T, std::vector<std::pair<std::string, double>>>) {
+      py::dict t;
+      for (const auto& [stage, s] : v) t[py::str(stage)] = s;
+      d[name] = t;
+    } else {
+      d[name] = v;
+    }
+  });
   d["params"] = params_dict(params);
   out["diagnostics"] = d;
   return out;

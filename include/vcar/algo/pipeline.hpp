@@ -23,6 +23,7 @@
 #include "vcar/algo/boundary_refinement.hpp"
 #include "vcar/algo/coplanar_background.hpp"
 #include "vcar/algo/decisive_threshold.hpp"
+#include "vcar/algo/diagnostics.hpp"
 #include "vcar/algo/occlusion_growth.hpp"
 #include "vcar/algo/overshoot.hpp"
 #include "vcar/algo/params.hpp"
@@ -52,31 +53,6 @@ using ProgressCallback = std::function<bool(const Progress&)>;
 
 struct Cancelled : Error {
   explicit Cancelled(const std::string& stage) : Error("cancelled by the caller", stage) {}
-};
-
-struct Diagnostics {
-  std::size_t n_scene = 0;          // Gaussians in the scene
-  std::size_t n_coarse = 0;         // |G_coarse|
-  std::size_t n_fine = 0;           // |G_fine| (= n_coarse when SSS did not run)
-  std::size_t n_final = 0;          // selected after ABR (ABR changes scales, not membership)
-  std::size_t valid_cameras = 0;    // |V_valid| (A.1)
-  double max_gap_deg = 0;           // Delta_max (Eq. 6)
-  Eigen::Vector3f gap_direction = Eigen::Vector3f::Zero();
-  bool sss_triggered = false;
-  float tau_fine_applied = 0.f;     // the fine round's threshold (Eq. R7: tau_fine or tau_strict); 0: no fine round
-  bool undershoot_applied = false;  // Eq. R6 shaped the fine vote (on, and its gate R6c found the vote without it split)
-  std::vector<Camera> sampled_cameras;  // V_sampled
-  ObjectSphere sphere{};
-  std::size_t abr_flagged = 0, abr_compressed = 0;
-  std::size_t abr_retraced = 0;     // flagged candidates refined once more, alone (BoundaryRefinement::defer_tracing)
-  std::size_t abr_masks_widened = 0; // training masks ABR read widened by their undershoot (Eq. R8)
-  std::size_t coplanar_dropped = 0;  // hidden candidates on a seen background plane, dropped (Eq. R10)
-  std::size_t overshoot_eroded = 0;  // masks voted eroded by their measured overshoot (Eq. R11), every round
-  std::size_t masks_grown = 0;       // coarse-round masks voted grown to the render's occlusion edges (Eq. R12)
-  std::size_t masks_missing = 0;    // frames the segmenter answered with "no mask"
-  std::size_t mask_store_bytes = 0; // run-length bytes held for ABR
-  std::string note;                 // why the pipeline stopped early, if it did
-  std::vector<std::pair<std::string, double>> timings_s;  // stage -> seconds, in order
 };
 
 struct SegmentationResult {
