@@ -11,7 +11,7 @@
 
 #include <Eigen/Core>
 
-#include "vcar/algo/boundary_refinement.hpp"
+#include "vcar/algo/abr_params.hpp"
 #include "vcar/core/error.hpp"
 
 namespace vcar {
