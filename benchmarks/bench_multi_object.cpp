@@ -1,4 +1,4 @@
-// Several objects in one run (`vcar segment --prompts`, examples/vcar_cli/multi_segment.hpp)
+// Several objects in one run (`vcar segment --prompts`, vcar::segment_objects, algo/segment_objects.hpp)
 // against one vcar::segment run per object, on the demo's synthetic scene (target and its
 // neighbour, forward capture, robust preset). Two mask sources:
 //  - oracle: masks ray-cast from the ground truth, never looking at the frames (one cast per
@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-#include "../examples/vcar_cli/multi_segment.hpp"
+#include "vcar/algo/segment_objects.hpp"
 #include "vcar/algo/pipeline.hpp"
 #include "vcar/backends/cpu/tiled_renderer.hpp"
 #include "vcar/core/parallel.hpp"
@@ -89,7 +89,7 @@ int main(int argc, char** argv) {
     op.target_id = id;
     oracles.emplace_back(world, op, cpu);
   }
-  std::vector<vcar::cli::ObjectPrompt> objects(2);
+  std::vector<vcar::ObjectPrompt> objects(2);
   objects[0].name = "target";
   objects[1].name = "neighbour";
   for (auto& o : objects) o.prompt.reference_view = rig.reference;
@@ -100,7 +100,7 @@ int main(int argc, char** argv) {
     std::vector<double> single_t, multi_t;
     std::size_t single_renders = 0, multi_renders = 0, single_masks = 0, multi_masks = 0, single_calls = 0, multi_calls = 0;
     std::vector<vcar::SegmentationResult> singles(2);
-    vcar::cli::MultiSegmentation multi;
+    vcar::MultiSegmentation multi;
     for (int r = 0; r < repeats; ++r) {
       auto t = Clock::now();
       renderer.renders = 0;
@@ -113,8 +113,8 @@ int main(int argc, char** argv) {
       single_renders = renderer.renders;
       renderer.renders = 0;
       multi_masks = multi_calls = 0;
-      vcar::cli::MultiSegmentFn fn = [&](const vcar::FrameSequence& f, const std::vector<vcar::cli::ObjectRequest>& req,
-                                        const vcar::cli::ObjectMaskSink& sink) {
+      auto fn = vcar::make_multi_segmenter([&](const vcar::FrameSequence& f, const std::vector<vcar::ObjectRequest>& req,
+                                               const vcar::ObjectMaskSink& sink) {
         ++multi_calls;
         for (std::size_t k = 0; k < f.size(); ++k) {
           if (pixels) (void)f.image(k);  // one image per frame, whatever the number of objects
@@ -127,9 +127,9 @@ int main(int argc, char** argv) {
             sink(k, q, m ? &*m : nullptr);
           }
         }
-      };
+      });
       t = Clock::now();
-      multi = vcar::cli::segment_objects(world.scene, rig.train, objects, renderer, fn, params);
+      multi = vcar::segment_objects(world.scene, rig.train, objects, renderer, fn, params);
       multi_t.push_back(since(t));
       multi_renders = renderer.renders;
     }

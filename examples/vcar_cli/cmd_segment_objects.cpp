@@ -1,4 +1,5 @@
-// `vcar segment --prompts FILE`: several objects in one run (multi_segment.hpp).
+// `vcar segment --prompts FILE`: several objects in one run (vcar::segment_objects,
+// algo/segment_objects.hpp).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -12,13 +13,13 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_common.hpp"
-#include "vcar/io/diagnostics_json.hpp"
 #include "commands.hpp"
 #include "input_checks.hpp"
-#include "multi_segment.hpp"
 #include "photo_renderer.hpp"
 #include "scene_inputs.hpp"
+#include "vcar/algo/segment_objects.hpp"
 #include "vcar/backends/cpu/tiled_renderer.hpp"
+#include "vcar/io/diagnostics_json.hpp"
 #include "vcar/io/external_segmenter.hpp"
 #include "vcar/io/label_ply.hpp"
 #include "vcar/io/mask_folder_segmenter.hpp"
@@ -82,17 +83,6 @@ std::vector<ObjectPrompt> read_prompts(const fs::path& file, const std::vector<C
   return out;
 }
 
-// One frame of a sequence as a sequence of its own (for the per-object segmenters, asked frame
-// by frame so that each frame's render is shared by the objects).
-FrameSequence one_frame(const FrameSequence& f, std::size_t k) {
-  FrameSequence one;
-  one.cameras = f.cameras.subspan(k, 1);
-  one.subset = f.subset;
-  if (f.drawn) one.drawn = [&f, k](std::size_t) { return f.drawn(k); };
-  one.image = [&f, k](std::size_t) { return f.image(k); };
-  return one;
-}
-
 }  // namespace
 
 int run_segment_objects(const SegmentOptions& o, const GlobalOptions& g) {
@@ -143,23 +133,13 @@ int run_segment_objects(const SegmentOptions& o, const GlobalOptions& g) {
   MultiSegmentFn source;
   if (!o.masks.empty()) {
     for (const ObjectPrompt& ob : objects) folders.emplace_back(fs::path(o.masks) / ob.name);
-    source = [&](const FrameSequence& f, const std::vector<ObjectRequest>& req, const ObjectMaskSink& sink) {
-      if (req.size() == 1 && req[0].first_frame == 0 && req[0].frames == f.size()) {
-        folders[req[0].object].segment(f, req[0].prompt, [&](std::size_t k, const Mask* m) { sink(k, 0, m); });
-        return;
-      }
-      for (std::size_t k = 0; k < f.size(); ++k) {
-        const FrameSequence one = one_frame(f, k);
-        for (std::size_t q = 0; q < req.size(); ++q)
-          if (req[q].covers(k))
-            folders[req[q].object].segment(one, req[q].prompt, [&](std::size_t, const Mask* m) { sink(k, q, m); });
-      }
+    source = [each = EachObject<io::MaskFolderSegmenter>(folders)](const FrameSequence& f, const std::vector<ObjectRequest>& req,
+                                                                   const ObjectMaskSink& sink) mutable {
+      each.segment_objects(f, req, sink);
     };
   } else if (external) {
     source = [&](const FrameSequence& f, const std::vector<ObjectRequest>& req, const ObjectMaskSink& sink) {
-      std::vector<io::ExternalSegmenter::Object> asked;
-      for (const ObjectRequest& r : req) asked.push_back({r.name, r.prompt, r.first_frame, r.frames});
-      external->segment_objects(f, std::move(asked), sink);
+      external->segment_objects(f, req, sink);
     };
   } else {
     // The rendered mode's label copies of the scene: prepared once, shared by the objects.
@@ -192,8 +172,9 @@ int run_segment_objects(const SegmentOptions& o, const GlobalOptions& g) {
   OutputDir out(o.out);
   MultiSegmentation result;
   try {
-    if (photos) result = segment_objects(scene, cams, objects, *photos, source, params, progress.callback());
-    else result = segment_objects(scene, cams, objects, cpu_renderer, source, params, progress.callback());
+    auto multi = make_multi_segmenter(source);
+    if (photos) result = segment_objects(scene, cams, objects, *photos, multi, params, progress.callback());
+    else result = segment_objects(scene, cams, objects, cpu_renderer, multi, params, progress.callback());
   } catch (const Cancelled&) {
     if (external && !external->last_request_dir().empty() && external->failure() == io::ExternalSegmenter::Failure::cancelled) {
       std::error_code ec;

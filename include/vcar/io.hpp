@@ -15,6 +15,8 @@
 #include "vcar/io/state_ply.hpp"
 #include "vcar/io/label_ply.hpp"
 #include "vcar/io/selection_identity.hpp"
+#include "vcar/io/selection_file.hpp"
+#include "vcar/io/diagnostics_json.hpp"
 #include "vcar/io/colmap.hpp"
 #include "vcar/io/cameras_json.hpp"
 #include "vcar/io/transforms_json.hpp"

@@ -17,6 +17,7 @@
 
 #include "vcar/concepts/renderer.hpp"
 #include "vcar/concepts/segmenter.hpp"
+#include "vcar/concepts/multi_segmenter.hpp"
 
 #include "vcar/algo/params.hpp"
 #include "vcar/algo/visibility_voting.hpp"
@@ -27,6 +28,7 @@
 #include "vcar/algo/boundary_distance.hpp"
 #include "vcar/algo/boundary_refinement.hpp"
 #include "vcar/algo/pipeline.hpp"
+#include "vcar/algo/segment_objects.hpp"
 #include "vcar/algo/reselection.hpp"
 #include "vcar/algo/prompt_lift.hpp"
 

@@ -48,6 +48,7 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
+#include "vcar/concepts/multi_segmenter.hpp"
 #include "vcar/concepts/segmenter.hpp"
 #include "vcar/core/camera.hpp"
 #include "vcar/core/error.hpp"
@@ -159,14 +160,10 @@ public:
   // whole scene) gives every object all frames; a batched round (each object's own frames one
   // after the other: the fine rounds' renders of each object's G_coarse) gives each its part.
   // Object names must be usable as folder names ([A-Za-z0-9_.-], not "." or "..").
-  using ObjectMaskSink = std::function<void(std::size_t frame, std::size_t object, const Mask*)>;
-  static constexpr std::size_t all_frames = static_cast<std::size_t>(-1);
-  struct Object {
-    std::string name;
-    Prompt prompt;                    // reference_view: a frame of the round, inside the range
-    std::size_t first_frame = 0;      // the frames it is asked about:
-    std::size_t frames = all_frames;  //   [first_frame, first_frame + frames); all_frames: to the end
-  };
+  // A model of MultiSegmenter (concepts/multi_segmenter.hpp): segment_objects(vcar's
+  // ObjectRequests).
+  using Object = ObjectRequest;
+  static constexpr std::size_t all_frames = ObjectRequest::all_frames;
   void segment_objects(const FrameSequence& frames, std::vector<Object> objects, const ObjectMaskSink& sink) {
     if (objects.empty()) throw Error("no object to segment", "segmenter");
     for (Object& o : objects) {
@@ -486,5 +483,7 @@ private:
 };
 
 static_assert(Segmenter<ExternalSegmenter>);
+
+static_assert(MultiSegmenter<ExternalSegmenter>);
 
 }  // namespace vcar::io

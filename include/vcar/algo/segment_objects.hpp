@@ -1,20 +1,21 @@
 #pragma once
-// Several objects in one run (`vcar segment --prompts`). One coarse round serves every object:
-// each training view is rendered once (with depth when the vote's occlusion test wants it), the
-// segmenter is asked once per frame for every object's mask, and each object's vote (Eq. 1-3, or
-// the robust vote) takes its mask. Then each object goes on alone, exactly as vcar::segment
-// (algo/pipeline.hpp) does after its coarse vote: its own sphere (Eq. 4-5), view completeness
-// (Eq. 6), SSS and fine round (Eq. 7-8) and ABR (Eq. 9-14). The fine rounds of all objects go to
-// the segmenter in one batched call: each object's frames (renders of its own G_coarse) one
-// after the other, each object asked about its own frames only (ObjectRequest::first_frame,
-// frames), so an external segmenter starts once for them all (two calls per run, not one per
-// object and round).
+// vcar::segment_objects: several objects in one run. One coarse round serves every object: each
+// training view is rendered once (with depth when the vote's occlusion test wants it), the
+// segmenter (a MultiSegmenter, concepts/multi_segmenter.hpp) is asked once per frame for every
+// object's mask, and each object's vote (Eq. 1-3, or the robust vote) takes its mask. Then each
+// object goes on alone, exactly as vcar::segment (algo/pipeline.hpp) does after its coarse vote:
+// its own sphere (Eq. 4-5), view completeness (Eq. 6), SSS and fine round (Eq. 7-8) and ABR
+// (Eq. 9-14). The fine rounds of all objects go to the segmenter in one batched call: each
+// object's frames (renders of its own G_coarse) one after the other, each object asked about its
+// own frames only (ObjectRequest::first_frame, frames), so an external segmenter starts once for
+// them all (two calls per run, not one per object and round).
 // A Gaussian that two objects select goes to the one with the higher score (R_i of its last
-// vote; ties to the earlier object).
+// vote; ties to the earlier object): resolve_conflicts.
 //
-// The vote is one accumulator per object, not MultiObjectVoting: the default robust vote and the
+// The vote is one accumulator per object, not MultiObjectVoting: the robust vote and the
 // occlusion test have no multi-object form; what the objects share is the rendering and the
-// segmenter's calls. tests.cmake checks that each object's result equals a single run's.
+// segmenter's calls. Each object's result equals vcar::segment's with the same masks
+// (examples/vcar_cli/tests.cmake checks it through `vcar segment --prompts`).
 #include <cstddef>
 #include <functional>
 #include <memory>
@@ -24,8 +25,9 @@
 #include <vector>
 
 #include "vcar/algo/pipeline.hpp"
+#include "vcar/concepts/multi_segmenter.hpp"
 
-namespace vcar::cli {
+namespace vcar {
 
 struct ObjectPrompt {
   std::string name;
@@ -33,19 +35,7 @@ struct ObjectPrompt {
   int object_id = -1;     // the synthetic world's object (for the oracle and eval), -1 unknown
 };
 
-// One object asked of the segmenter in a round, about frames [first_frame, first_frame + frames)
-// of it (the coarse round: every frame; the batched fine round: the object's own);
-// prompt.reference_view is a frame of the round inside that range.
-struct ObjectRequest {
-  std::size_t object = 0;  // index into the run's objects
-  std::string name;
-  Prompt prompt;
-  std::size_t first_frame = 0, frames = 0;
-  bool covers(std::size_t k) const { return k >= first_frame && k - first_frame < frames; }
-};
-// sink(frame, k, mask): the mask of requests[k] in that frame (null: no mask), for frames the
-// request covers.
-using ObjectMaskSink = std::function<void(std::size_t frame, std::size_t k, const Mask* mask)>;
+// The segmenter behind a function, as segment_objects calls it.
 using MultiSegmentFn = std::function<void(const FrameSequence&, const std::vector<ObjectRequest>&, const ObjectMaskSink&)>;
 
 struct MultiSegmentation {
@@ -56,7 +46,7 @@ struct MultiSegmentation {
   std::vector<std::pair<std::string, double>> timings_s;  // the shared coarse round
 };
 
-namespace detail_multi {
+namespace detail {
 
 // One call of the segmenter; its failures other than vcar::Error become one naming the round.
 inline void ask(const MultiSegmentFn& segmenter, const FrameSequence& seq, const std::vector<ObjectRequest>& requests,
@@ -70,7 +60,7 @@ inline void ask(const MultiSegmentFn& segmenter, const FrameSequence& seq, const
   }
 }
 
-// Stages 2 and 3 of every object (vcar::detail::ObjectRefinement), their fine rounds in one
+// Stages 2 and 3 of every object (ObjectRefinement), their fine rounds in one
 // segmenter call: the frames of object a, then of object b, ..., each frame rendered from its
 // object's G_coarse; each object's request covers its own frames, its prompt on the first of
 // them (the reference view). Timings per object: its renders and votes; the segmenter's own
@@ -78,14 +68,12 @@ inline void ask(const MultiSegmentFn& segmenter, const FrameSequence& seq, const
 template <Renderer R, class CoarseSeen>
 void refine_objects(const GaussianScene& scene, const std::vector<Camera>& train_cameras,
                     const std::vector<ObjectPrompt>& objects, R& renderer, const MultiSegmentFn& segmenter,
-                    const VcarParams& params, const ProgressCallback& progress, vcar::detail::Clock::time_point t_start,
-                    std::vector<std::unique_ptr<vcar::detail::RoundVote>>& votes, CoarseSeen&& coarse_seen,
+                    const VcarParams& params, const ProgressCallback& progress, Clock::time_point t_start,
+                    std::vector<std::unique_ptr<RoundVote>>& votes, CoarseSeen&& coarse_seen,
                     std::vector<std::vector<std::optional<RleMask>>>& train_masks,
                     std::vector<SegmentationResult>& results) {
-  using vcar::detail::Clock;
-  using vcar::detail::seconds_since;
   const std::size_t K = objects.size();
-  std::vector<std::unique_ptr<vcar::detail::ObjectRefinement>> refine(K);
+  std::vector<std::unique_ptr<ObjectRefinement>> refine(K);
   std::vector<bool> alive(K);
   std::vector<double> own_s(K, 0.0);  // each object's time outside the shared call's segmenter
   for (std::size_t o = 0; o < K; ++o) {
@@ -96,7 +84,7 @@ void refine_objects(const GaussianScene& scene, const std::vector<Camera>& train
     std::vector<Index> selected;
     std::vector<float> scores;
     votes[o]->selected(params.tau_coarse, selected, scores);
-    refine[o] = std::make_unique<vcar::detail::ObjectRefinement>(scene, train_cameras, objects[o].prompt, params,
+    refine[o] = std::make_unique<ObjectRefinement>(scene, train_cameras, objects[o].prompt, params,
                                                                  train_masks[o], std::move(selected), std::move(scores),
                                                                  results[o]);
     alive[o] = refine[o]->start(renderer, progress, t_start);
@@ -109,7 +97,7 @@ void refine_objects(const GaussianScene& scene, const std::vector<Camera>& train
   std::vector<ObjectRequest> requests;
   for (std::size_t o = 0; o < K; ++o) {
     if (!alive[o] || !refine[o]->has_round()) continue;
-    ObjectRequest r{o, objects[o].name, objects[o].prompt, frames.size(), refine[o]->frames().size()};
+    ObjectRequest r{objects[o].name, objects[o].prompt, frames.size(), refine[o]->frames().size(), o};
     r.prompt.reference_view = frames.size();  // the object's first frame is its reference view
     for (const Camera& c : refine[o]->frames()) {
       frames.push_back(c);
@@ -133,7 +121,7 @@ void refine_objects(const GaussianScene& scene, const std::vector<Camera>& train
       const std::size_t o = owner[k];
       const auto tr = Clock::now();
       const bool depth = refine[o]->wants_depth();
-      RenderOutput r = vcar::detail::render_view(renderer, scene, frames[k], &refine[o]->coarse_set(), params.background, depth);
+      RenderOutput r = render_view(renderer, scene, frames[k], &refine[o]->coarse_set(), params.background, depth);
       ImageRGB8 img = to_8bit(r.rgb);
       if (depth) last.emplace(k, std::move(r));
       t_render[o] += seconds_since(tr);
@@ -181,7 +169,7 @@ void refine_objects(const GaussianScene& scene, const std::vector<Camera>& train
   }
 }
 
-}  // namespace detail_multi
+}  // namespace detail
 
 // A Gaussian selected by several objects stays with the highest score (ties: the earlier
 // object); the others drop it (index, score and refined scale). Returns the number of such
@@ -231,12 +219,10 @@ inline std::size_t resolve_conflicts(std::vector<SegmentationResult>& objects, s
 }
 
 // Segments every object of `objects` (see the top of this file). Throws like vcar::segment.
-template <Renderer R>
+template <Renderer R, MultiSegmenter S>
 MultiSegmentation segment_objects(const GaussianScene& scene, const std::vector<Camera>& train_cameras,
-                                  const std::vector<ObjectPrompt>& objects, R& renderer, const MultiSegmentFn& source,
+                                  const std::vector<ObjectPrompt>& objects, R& renderer, S& source,
                                   const VcarParams& params = VcarParams::robust(), const ProgressCallback& progress = {}) {
-  using vcar::detail::Clock;
-  using vcar::detail::seconds_since;
   params.validate();
   if (scene.empty()) throw Error("the scene has no Gaussians", "scene");
   if (train_cameras.empty()) throw Error("no training cameras", "cameras");
@@ -246,18 +232,18 @@ MultiSegmentation segment_objects(const GaussianScene& scene, const std::vector<
       throw Error("reference view " + std::to_string(o.prompt.reference_view) + " out of range", "object '" + o.name + "'");
   for (const Camera& c : train_cameras) c.validate();
 
-  const auto t_start = Clock::now();
+  const auto t_start = detail::Clock::now();
   const std::size_t M = train_cameras.size(), K = objects.size();
   MultiSegmentation out;
   const MultiSegmentFn segmenter = [&](const FrameSequence& f, const std::vector<ObjectRequest>& r, const ObjectMaskSink& s) {
     ++out.segmenter_calls;
-    source(f, r, s);
+    source.segment_objects(f, r, s);
   };
   out.objects.resize(K);
   for (auto& r : out.objects) r.diagnostics.n_scene = scene.size();
 
   // ---- the shared coarse round: frames in the first object's order (its reference first).
-  const std::vector<std::size_t> order = vcar::detail::training_order(M, objects[0].prompt.reference_view);
+  const std::vector<std::size_t> order = detail::training_order(M, objects[0].prompt.reference_view);
   std::vector<Camera> frames;
   std::vector<std::size_t> frame_of(M);
   for (std::size_t k = 0; k < M; ++k) {
@@ -266,21 +252,21 @@ MultiSegmentation segment_objects(const GaussianScene& scene, const std::vector<
   }
   std::vector<ObjectRequest> requests;
   for (std::size_t o = 0; o < K; ++o) {
-    ObjectRequest r{o, objects[o].name, objects[o].prompt, 0, M};
+    ObjectRequest r{objects[o].name, objects[o].prompt, 0, M, o};
     r.prompt.reference_view = frame_of[objects[o].prompt.reference_view];
     requests.push_back(std::move(r));
   }
-  std::vector<std::unique_ptr<vcar::detail::RoundVote>> votes;
-  for (std::size_t o = 0; o < K; ++o) votes.push_back(std::make_unique<vcar::detail::RoundVote>(scene, nullptr, params, false));
+  std::vector<std::unique_ptr<detail::RoundVote>> votes;
+  for (std::size_t o = 0; o < K; ++o) votes.push_back(std::make_unique<detail::RoundVote>(scene, nullptr, params, false));
   const bool depth = votes[0]->wants_depth();
   std::vector<std::vector<std::optional<RleMask>>> train_masks(K, std::vector<std::optional<RleMask>>(M));
   std::vector<std::vector<bool>> seen(K, std::vector<bool>(M, false));
   std::optional<std::pair<std::size_t, RenderOutput>> last;  // one render per frame, shared by the objects
   double t_render = 0, t_vote = 0;
   auto render_frame = [&](std::size_t k, bool want_depth) {
-    const auto tr = Clock::now();
-    RenderOutput r = vcar::detail::render_view(renderer, scene, frames[k], nullptr, params.background, want_depth);
-    t_render += seconds_since(tr);
+    const auto tr = detail::Clock::now();
+    RenderOutput r = detail::render_view(renderer, scene, frames[k], nullptr, params.background, want_depth);
+    t_render += detail::seconds_since(tr);
     return r;
   };
   FrameSequence seq;
@@ -292,7 +278,6 @@ MultiSegmentation segment_objects(const GaussianScene& scene, const std::vector<
     if (depth) last.emplace(k, std::move(r));
     return img;
   };
-  auto usable = [&](const Mask* m) { return vcar::detail::usable(m, params); };
   Mask scratch;  // a mask eroded by Eq. R11
   ObjectMaskSink sink = [&](std::size_t k, std::size_t q, const Mask* m) {
     if (k >= frames.size() || q >= K)
@@ -305,26 +290,26 @@ MultiSegmentation segment_objects(const GaussianScene& scene, const std::vector<
       throw Error("mask is " + std::to_string(m->width) + "x" + std::to_string(m->height) + ", the view is " +
                       std::to_string(cam.width) + "x" + std::to_string(cam.height), where);
     if (!m) ++out.objects[q].diagnostics.masks_missing;
-    m = usable(m);
+    m = detail::usable(m, params);
     const RenderOutput* render = last && last->first == k ? &last->second : nullptr;
     if (depth && m && !render) {  // rendered once for this frame, then shared by the other objects
       last.emplace(k, render_frame(k, true));
       render = &last->second;
     }
-    const auto tv = Clock::now();
-    m = vcar::detail::vote(*votes[q], cam, m, render, scene, nullptr, renderer, params, scratch);
+    const auto tv = detail::Clock::now();
+    m = detail::vote(*votes[q], cam, m, render, scene, nullptr, renderer, params, scratch);
     train_masks[q][order[k]] = m && params.enable_abr ? std::optional<RleMask>(RleMask::encode(*m)) : std::nullopt;
-    t_vote += seconds_since(tv);
-    if (q + 1 == K && progress && !progress({"coarse round (all objects)", k + 1, M, seconds_since(t_start)}))
+    t_vote += detail::seconds_since(tv);
+    if (q + 1 == K && progress && !progress({"coarse round (all objects)", k + 1, M, detail::seconds_since(t_start)}))
       throw Cancelled("coarse round");
   };
   if (progress && !progress({"coarse", 0, 0, 0.0})) throw Cancelled("coarse");
-  const auto t1 = Clock::now();
-  detail_multi::ask(segmenter, seq, requests, sink, "coarse round");
+  const auto t1 = detail::Clock::now();
+  detail::ask(segmenter, seq, requests, sink, "coarse round");
   for (std::size_t o = 0; o < K; ++o)
     for (std::size_t k = 0; k < M; ++k)
       if (!seen[o][k]) ++out.objects[o].diagnostics.masks_missing;
-  const double t_total = seconds_since(t1);
+  const double t_total = detail::seconds_since(t1);
   out.timings_s = {{"coarse_render", t_render}, {"coarse_segment", t_total - t_render - t_vote}, {"coarse_voting", t_vote}};
 
   // ---- each object alone: sphere, view completeness, SSS cameras; one batched fine round;
@@ -332,11 +317,11 @@ MultiSegmentation segment_objects(const GaussianScene& scene, const std::vector<
   auto coarse_seen = [&](std::size_t o) {
     return votes[o]->occlusion() ? votes[o]->unoccluded_views() : std::span<const std::uint16_t>{};
   };
-  detail_multi::refine_objects(scene, train_cameras, objects, renderer, segmenter, params, progress, t_start,
+  detail::refine_objects(scene, train_cameras, objects, renderer, segmenter, params, progress, t_start,
                                votes, coarse_seen, train_masks, out.objects);
   out.conflicts = resolve_conflicts(out.objects, scene.size(), out.lost);
-  out.timings_s.emplace_back("total", seconds_since(t_start));
+  out.timings_s.emplace_back("total", detail::seconds_since(t_start));
   return out;
 }
 
-}  // namespace vcar::cli
+}  // namespace vcar
