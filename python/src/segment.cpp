@@ -7,6 +7,9 @@
 // and stages, runs Python's signal handlers (KeyboardInterrupt stops the pipeline the same way).
 #include <pybind11/stl.h>
 
+#include <functional>
+#include <memory>
+#include <optional>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -17,6 +20,7 @@
 #include "result.hpp"
 #include "segmenters.hpp"
 #include "vcar/algo/pipeline.hpp"
+#include "vcar/algo/segment_objects.hpp"
 #include "vcar/backends/cpu/tiled_renderer.hpp"
 
 namespace vcar::python {
@@ -242,6 +246,31 @@ Prompt prompt_from(py::handle obj, const std::vector<Camera>& cams, py::dict& no
   return p;
 }
 
+// The pipeline's progress callback: Python's signal handlers (Ctrl-C) and the user's callable,
+// with the GIL taken.
+ProgressCallback progress_hook(py::object progress, ErrorStash& stash) {
+  return [progress, &stash](const Progress& pg) -> bool {
+    py::gil_scoped_acquire gil;
+    const std::string at = std::string(pg.stage) + (pg.views ? ", view " + std::to_string(pg.view) + "/" + std::to_string(pg.views) : "");
+    if (PyErr_CheckSignals() != 0) stash.keep_and_throw(py::error_already_set(), at);  // Ctrl-C
+    if (progress.is_none()) return true;
+    py::object r;
+    try {
+      r = progress(ProgressPy{std::string(pg.stage), pg.view, pg.views, pg.elapsed_s});
+    } catch (py::error_already_set& e) {
+      stash.keep_and_throw(std::move(e), "progress, " + at);
+    }
+    return !(py::isinstance<py::bool_>(r) && !r.cast<bool>());
+  };
+}
+
+// One object's segmenter (an oracle or a mask folder run in C++, or a Python callable) behind a
+// function: vcar::EachObject takes one type for all objects.
+struct ObjectSegmenter {
+  std::function<void(const FrameSequence&, const Prompt&, const MaskSink&)> fn;
+  void segment(const FrameSequence& f, const Prompt& p, const MaskSink& sink) { fn(f, p, sink); }
+};
+
 py::dict segment(py::object scene_obj, py::object cameras, py::object prompt, py::object segmenter,
                  py::object renderer, py::object params, py::object progress) {
   Scene& scene = scene_from(scene_obj);
@@ -268,19 +297,7 @@ py::dict segment(py::object scene_obj, py::object cameras, py::object prompt, py
   if (!renderer.is_none()) py_renderer.emplace(renderer, scene_obj, stash);
   cpu::TiledRenderer cpu_renderer;
 
-  const ProgressCallback hook = [&](const Progress& pg) -> bool {
-    py::gil_scoped_acquire gil;
-    const std::string at = std::string(pg.stage) + (pg.views ? ", view " + std::to_string(pg.view) + "/" + std::to_string(pg.views) : "");
-    if (PyErr_CheckSignals() != 0) stash.keep_and_throw(py::error_already_set(), at);  // Ctrl-C
-    if (progress.is_none()) return true;
-    py::object r;
-    try {
-      r = progress(ProgressPy{std::string(pg.stage), pg.view, pg.views, pg.elapsed_s});
-    } catch (py::error_already_set& e) {
-      stash.keep_and_throw(std::move(e), "progress, " + at);
-    }
-    return !(py::isinstance<py::bool_>(r) && !r.cast<bool>());
-  };
+  const ProgressCallback hook = progress_hook(progress, stash);
 
   SegmentationResult result;
   bool raised = false;
@@ -302,6 +319,92 @@ py::dict segment(py::object scene_obj, py::object cameras, py::object prompt, py
   return result_dict(std::move(result), p);
 }
 
+
+py::dict segment_objects(py::object scene_obj, py::object cameras, py::object objects, py::object renderer,
+                         py::object params, py::object progress) {
+  Scene& scene = scene_from(scene_obj);
+  const std::vector<Camera> cams = cameras_from(cameras);
+  if (cams.empty()) throw Error("no cameras", "cameras");
+  if (!py::isinstance<py::list>(objects) || py::len(objects) == 0)
+    throw Error("must be a non-empty list of dicts {name, prompt, segmenter}", "objects");
+  const VcarParams p = params_from(params);
+  if (!renderer.is_none() && !PyCallable_Check(renderer.ptr()))
+    throw Error("must be None (the CPU renderer) or a callable taking a request", "renderer");
+  if (!progress.is_none() && !PyCallable_Check(progress.ptr())) throw Error("must be None or a callable", "progress");
+
+  ErrorStash stash;  // before the GIL is released: destroyed after it is taken back
+  std::vector<ObjectPrompt> prompts;
+  std::vector<ObjectSegmenter> per;
+  std::vector<std::unique_ptr<PythonSegmenter>> py_segmenters;
+  py::list names;
+  for (std::size_t o = 0; o < py::len(objects); ++o) {
+    const std::string where = "objects[" + std::to_string(o) + "]";
+    py::handle item = py::list(objects)[o];
+    if (!py::isinstance<py::dict>(item)) throw Error("must be a dict {name, prompt, segmenter}", where);
+    const py::dict d = py::reinterpret_borrow<py::dict>(item);
+    for (auto kv : d) {
+      const std::string key = py::str(kv.first).cast<std::string>();
+      if (key != "name" && key != "prompt" && key != "segmenter")
+        throw Error("unknown key '" + key + "' (name, prompt, segmenter)", where);
+    }
+    if (!d.contains("segmenter")) throw Error("needs a 'segmenter'", where);
+    ObjectPrompt op;
+    op.name = d.contains("name") ? py::str(d["name"]).cast<std::string>() : "object_" + std::to_string(o);
+    py::dict normalised;
+    op.prompt = prompt_from(d.contains("prompt") ? py::object(d["prompt"]) : py::object(py::none()), cams, normalised);
+    py::object seg = d["segmenter"];
+    if (py::isinstance<OracleSegmenterPy>(seg)) {
+      synth::OracleSegmenter* s = &*seg.cast<OracleSegmenterPy&>().seg;
+      per.push_back({[s](const FrameSequence& f, const Prompt& pr, const MaskSink& k) { s->segment(f, pr, k); }});
+    } else if (py::isinstance<MaskFolderSegmenterPy>(seg)) {
+      io::MaskFolderSegmenter* s = &*seg.cast<MaskFolderSegmenterPy&>().seg;
+      per.push_back({[s](const FrameSequence& f, const Prompt& pr, const MaskSink& k) { s->segment(f, pr, k); }});
+    } else {
+      if (!PyCallable_Check(seg.ptr()))
+        throw Error("must be a callable taking a request (or vcar.synth.OracleSegmenter / vcar.MaskFolderSegmenter)",
+                    where + "['segmenter']");
+      py_segmenters.push_back(std::make_unique<PythonSegmenter>(seg, normalised, stash));
+      PythonSegmenter* s = py_segmenters.back().get();
+      per.push_back({[s](const FrameSequence& f, const Prompt& pr, const MaskSink& k) { s->segment(f, pr, k); }});
+    }
+    names.append(op.name);
+    prompts.push_back(std::move(op));
+  }
+  std::optional<PythonRenderer> py_renderer;
+  if (!renderer.is_none()) py_renderer.emplace(renderer, scene_obj, stash);
+  cpu::TiledRenderer cpu_renderer;
+  const ProgressCallback hook = progress_hook(progress, stash);
+
+  MultiSegmentation result;
+  bool raised = false;
+  {
+    SceneUse use(scene);
+    py::gil_scoped_release nogil;
+    try {
+      EachObject<ObjectSegmenter> each(per);
+      result = py_renderer ? vcar::segment_objects(use.scene(), cams, prompts, *py_renderer, each, p, hook)
+                           : vcar::segment_objects(use.scene(), cams, prompts, cpu_renderer, each, p, hook);
+    } catch (const PythonRaised&) {
+      raised = true;
+    }
+  }
+  if (raised) stash.raise();
+  py::list out_objects;
+  for (std::size_t o = 0; o < result.objects.size(); ++o) {
+    py::dict r = result_dict(std::move(result.objects[o]), p);
+    r["name"] = names[o];
+    r["lost_to_others"] = result.lost[o];
+    out_objects.append(r);
+  }
+  py::dict t;
+  for (const auto& [stage, sec] : result.timings_s) t[py::str(stage)] = sec;
+  py::dict out;
+  out["objects"] = out_objects;
+  out["conflicts"] = result.conflicts;
+  out["segmenter_calls"] = result.segmenter_calls;
+  out["timings_s"] = t;
+  return out;
+}
 }  // namespace
 
 py::dict result_dict(SegmentationResult&& r, const VcarParams& params) {
@@ -418,6 +521,23 @@ vcar.segment; also a callable taking a request.)doc")
            py::arg("folder"))
       .def("__call__", [](MaskFolderSegmenterPy& s, SegmentationRequest& r) { return run_on_request(*s.seg, r); },
            py::arg("request"));
+
+  m.def("segment_objects", &segment_objects, py::arg("scene"), py::arg("cameras"), py::arg("objects"),
+        py::arg("renderer") = py::none(), py::arg("params") = py::none(), py::arg("progress") = py::none(),
+        R"doc(Segments several objects in one run (vcar::segment_objects): one coarse round for all
+(each training view rendered once), each object's sphere, SSS and fine round, the fine rounds
+in one batch, then ABR; a Gaussian two objects select stays with the higher score.
+
+  objects    list of dicts {"name": str, "prompt": as vcar.segment's, "segmenter": as
+             vcar.segment's (a callable taking a request, or an oracle / mask folder)}; each
+             segmenter is asked about its own object only
+  scene, cameras, renderer, params, progress: as vcar.segment
+
+Returns {"objects": [vcar.segment's result dict + "name", "lost_to_others" (Gaussians it
+gave up to another object)], "conflicts": Gaussians selected by more than one object,
+"segmenter_calls": the rounds (2 with fine rounds; each object's segmenter is called once a round), "timings_s": the
+shared coarse round}. Each object's result equals vcar.segment's with the same masks, less
+what it lost to others.)doc");
 
   m.def("segment", &segment, py::arg("scene"), py::arg("cameras"), py::arg("prompt"), py::arg("segmenter"),
         py::arg("renderer") = py::none(), py::arg("params") = py::none(), py::arg("progress") = py::none(),

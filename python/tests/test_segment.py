@@ -412,3 +412,39 @@ def test_ctrl_c_cancels():
     assert "interrupted after" in out and "finished" not in out, out + err
     assert "done" not in out
     assert latency < 10, latency
+
+
+# ---- several objects: vcar.segment_objects ---------------------------------------------------------
+
+def test_segment_objects_matches_single_runs(cli_dataset):
+    """Target and neighbour in one run (one coarse round) against one vcar.segment run each, the
+    same masks (each object's silhouette): equal, less what the other object won."""
+    scene, cameras, prompt = dataset_inputs(cli_dataset)
+    world = vcar.synth.load_world(cli_dataset)
+    calls = {"target": 0, "neighbour": 0}
+
+    def silhouettes(name, object_id):
+        def segment(request):
+            calls[name] += 1
+            return [world.silhouette_mask(c, object_id) for c in request.cameras]
+        return segment
+
+    p = {"reference_view": prompt["reference_view"], "points": prompt["points"][:1]}
+    objects = [{"name": "target", "prompt": p, "segmenter": silhouettes("target", world.target_id)},
+               {"name": "neighbour", "prompt": p, "segmenter": silhouettes("neighbour", world.neighbour_id)}]
+    multi = vcar.segment_objects(scene, cameras, objects, params="nvos")
+    assert [o["name"] for o in multi["objects"]] == ["target", "neighbour"]
+    rounds = multi["segmenter_calls"]
+    assert rounds in (1, 2)
+    assert calls == {"target": rounds, "neighbour": rounds}  # each object's segmenter: once a round
+    won = [set(o["indices"].tolist()) for o in multi["objects"]]
+    assert not (won[0] & won[1])
+    for k, o in enumerate(objects):
+        single = vcar.segment(scene, cameras, o["prompt"], o["segmenter"], params="nvos")
+        mine = set(single["indices"].tolist())
+        assert len(mine) > 0
+        assert won[k] <= mine
+        assert len(mine - won[k]) == multi["objects"][k]["lost_to_others"]
+        assert mine - won[k] <= won[1 - k]  # lost only to the other object
+    with pytest.raises(vcar.Error, match="segmenter"):
+        vcar.segment_objects(scene, cameras, [{"name": "x", "prompt": p}])

@@ -38,6 +38,7 @@ from ._vcar import (  # noqa: F401
     render,
     robust_sphere,
     segment,
+    segment_objects,
     set_num_threads,
     spiral_cameras,
     valid_cameras,
