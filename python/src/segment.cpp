@@ -271,6 +271,32 @@ struct ObjectSegmenter {
   void segment(const FrameSequence& f, const Prompt& p, const MaskSink& sink) { fn(f, p, sink); }
 };
 
+// vcar.segment's `segmenter` argument (named `where` in errors) as an ObjectSegmenter; a Python
+// callable is held in `keep`, with the request's normalised `prompt`.
+ObjectSegmenter segmenter_from(py::object seg, py::dict prompt, ErrorStash& stash,
+                               std::vector<std::unique_ptr<PythonSegmenter>>& keep, const std::string& where) {
+  if (py::isinstance<OracleSegmenterPy>(seg)) {
+    synth::OracleSegmenter* s = &*seg.cast<OracleSegmenterPy&>().seg;
+    return {[s](const FrameSequence& f, const Prompt& pr, const MaskSink& k) { s->segment(f, pr, k); }};
+  }
+  if (py::isinstance<MaskFolderSegmenterPy>(seg)) {
+    io::MaskFolderSegmenter* s = &*seg.cast<MaskFolderSegmenterPy&>().seg;
+    return {[s](const FrameSequence& f, const Prompt& pr, const MaskSink& k) { s->segment(f, pr, k); }};
+  }
+  if (!PyCallable_Check(seg.ptr()))
+    throw Error("must be a callable taking a request (or vcar.synth.OracleSegmenter / vcar.MaskFolderSegmenter)", where);
+  keep.push_back(std::make_unique<PythonSegmenter>(seg, prompt, stash));
+  PythonSegmenter* s = keep.back().get();
+  return {[s](const FrameSequence& f, const Prompt& pr, const MaskSink& k) { s->segment(f, pr, k); }};
+}
+
+// The optional callables of vcar.segment and vcar.segment_objects.
+void check_callables(const py::object& renderer, const py::object& progress) {
+  if (!renderer.is_none() && !PyCallable_Check(renderer.ptr()))
+    throw Error("must be None (the CPU renderer) or a callable taking a request", "renderer");
+  if (!progress.is_none() && !PyCallable_Check(progress.ptr())) throw Error("must be None or a callable", "progress");
+}
+
 py::dict segment(py::object scene_obj, py::object cameras, py::object prompt, py::object segmenter,
                  py::object renderer, py::object params, py::object progress) {
   Scene& scene = scene_from(scene_obj);
@@ -279,20 +305,11 @@ py::dict segment(py::object scene_obj, py::object cameras, py::object prompt, py
   py::dict prompt_dict;
   const Prompt pr = prompt_from(prompt, cams, prompt_dict);
   const VcarParams p = params_from(params);
-  if (!renderer.is_none() && !PyCallable_Check(renderer.ptr()))
-    throw Error("must be None (the CPU renderer) or a callable taking a request", "renderer");
-  if (!progress.is_none() && !PyCallable_Check(progress.ptr())) throw Error("must be None or a callable", "progress");
+  check_callables(renderer, progress);
 
   ErrorStash stash;  // before the GIL is released: destroyed after it is taken back
-  OracleSegmenterPy* oracle = py::isinstance<OracleSegmenterPy>(segmenter) ? &segmenter.cast<OracleSegmenterPy&>() : nullptr;
-  MaskFolderSegmenterPy* folder = py::isinstance<MaskFolderSegmenterPy>(segmenter) ? &segmenter.cast<MaskFolderSegmenterPy&>() : nullptr;
-  std::optional<PythonSegmenter> py_segmenter;
-  if (!oracle && !folder) {
-    if (!PyCallable_Check(segmenter.ptr()))
-      throw Error("must be a callable taking a request (or vcar.synth.OracleSegmenter / vcar.MaskFolderSegmenter)",
-                  "segmenter");
-    py_segmenter.emplace(segmenter, prompt_dict, stash);
-  }
+  std::vector<std::unique_ptr<PythonSegmenter>> keep;
+  ObjectSegmenter seg = segmenter_from(segmenter, prompt_dict, stash, keep, "segmenter");
   std::optional<PythonRenderer> py_renderer;
   if (!renderer.is_none()) py_renderer.emplace(renderer, scene_obj, stash);
   cpu::TiledRenderer cpu_renderer;
@@ -305,12 +322,8 @@ py::dict segment(py::object scene_obj, py::object cameras, py::object prompt, py
     SceneUse use(scene);
     py::gil_scoped_release nogil;
     try {
-      auto with = [&](auto& R) {
-        if (oracle) return vcar::segment(use.scene(), cams, pr, R, *oracle->seg, p, hook);
-        if (folder) return vcar::segment(use.scene(), cams, pr, R, *folder->seg, p, hook);
-        return vcar::segment(use.scene(), cams, pr, R, *py_segmenter, p, hook);
-      };
-      result = py_renderer ? with(*py_renderer) : with(cpu_renderer);
+      result = py_renderer ? vcar::segment(use.scene(), cams, pr, *py_renderer, seg, p, hook)
+                           : vcar::segment(use.scene(), cams, pr, cpu_renderer, seg, p, hook);
     } catch (const PythonRaised&) {
       raised = true;
     }
@@ -328,9 +341,7 @@ py::dict segment_objects(py::object scene_obj, py::object cameras, py::object ob
   if (!py::isinstance<py::list>(objects) || py::len(objects) == 0)
     throw Error("must be a non-empty list of dicts {name, prompt, segmenter}", "objects");
   const VcarParams p = params_from(params);
-  if (!renderer.is_none() && !PyCallable_Check(renderer.ptr()))
-    throw Error("must be None (the CPU renderer) or a callable taking a request", "renderer");
-  if (!progress.is_none() && !PyCallable_Check(progress.ptr())) throw Error("must be None or a callable", "progress");
+  check_callables(renderer, progress);
 
   ErrorStash stash;  // before the GIL is released: destroyed after it is taken back
   std::vector<ObjectPrompt> prompts;
@@ -352,21 +363,7 @@ py::dict segment_objects(py::object scene_obj, py::object cameras, py::object ob
     op.name = d.contains("name") ? py::str(d["name"]).cast<std::string>() : "object_" + std::to_string(o);
     py::dict normalised;
     op.prompt = prompt_from(d.contains("prompt") ? py::object(d["prompt"]) : py::object(py::none()), cams, normalised);
-    py::object seg = d["segmenter"];
-    if (py::isinstance<OracleSegmenterPy>(seg)) {
-      synth::OracleSegmenter* s = &*seg.cast<OracleSegmenterPy&>().seg;
-      per.push_back({[s](const FrameSequence& f, const Prompt& pr, const MaskSink& k) { s->segment(f, pr, k); }});
-    } else if (py::isinstance<MaskFolderSegmenterPy>(seg)) {
-      io::MaskFolderSegmenter* s = &*seg.cast<MaskFolderSegmenterPy&>().seg;
-      per.push_back({[s](const FrameSequence& f, const Prompt& pr, const MaskSink& k) { s->segment(f, pr, k); }});
-    } else {
-      if (!PyCallable_Check(seg.ptr()))
-        throw Error("must be a callable taking a request (or vcar.synth.OracleSegmenter / vcar.MaskFolderSegmenter)",
-                    where + "['segmenter']");
-      py_segmenters.push_back(std::make_unique<PythonSegmenter>(seg, normalised, stash));
-      PythonSegmenter* s = py_segmenters.back().get();
-      per.push_back({[s](const FrameSequence& f, const Prompt& pr, const MaskSink& k) { s->segment(f, pr, k); }});
-    }
+    per.push_back(segmenter_from(d["segmenter"], normalised, stash, py_segmenters, where + "['segmenter']"));
     names.append(op.name);
     prompts.push_back(std::move(op));
   }
