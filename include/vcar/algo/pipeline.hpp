@@ -69,6 +69,15 @@ inline double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
+// The one check of a segmenter's mask (every round, segment_objects, Reselection): null (no
+// mask) or the view's width x height with one channel; otherwise vcar::Error naming `where`.
+inline void check_mask(const Mask* m, const Camera& cam, const std::string& where) {
+  if (m && (m->width != cam.width || m->height != cam.height || m->channels != 1))
+    throw Error("mask is " + std::to_string(m->width) + "x" + std::to_string(m->height) + "x" +
+                    std::to_string(m->channels) + ", the view is " + std::to_string(cam.width) + "x" +
+                    std::to_string(cam.height) + "x1", where);
+}
+
 // Frame order of a round: the reference view first (conventions §4), then the other training
 // views in their order, then the sampled views.
 inline std::vector<std::size_t> training_order(std::size_t n, std::size_t reference) {
@@ -131,11 +140,7 @@ RoundTimes run_round(std::string_view round, const GaussianScene& scene,
     const Camera& cam = frames[k];
     if (seen[k]) throw Error("segmenter answered a frame twice", std::string(round) + ", view '" + cam.name + "'");
     seen[k] = true;
-    if (m && (m->width != cam.width || m->height != cam.height || m->channels != 1))
-      throw Error("mask is " + std::to_string(m->width) + "x" + std::to_string(m->height) + "x" +
-                      std::to_string(m->channels) + ", the view is " + std::to_string(cam.width) +
-                      "x" + std::to_string(cam.height) + "x1",
-                  std::string(round) + ", view '" + cam.name + "'");
+    check_mask(m, cam, std::string(round) + ", view '" + cam.name + "'");
     if (!m) ++masks_missing;
     const auto tv = Clock::now();
     on_mask(k, m, last && last->first == k ? &last->second : nullptr);

@@ -71,10 +71,7 @@ public:
       throw Error("view " + std::to_string(view) + " out of range (" + std::to_string(cameras_.size()) + " views)",
                   "Reselection");
     const Camera& cam = cameras_[view];
-    if (mask && (mask->width != cam.width || mask->height != cam.height || mask->channels != 1))
-      throw Error("mask is " + std::to_string(mask->width) + "x" + std::to_string(mask->height) + "x" +
-                      std::to_string(mask->channels) + ", the view is " + std::to_string(cam.width) + "x" +
-                      std::to_string(cam.height) + "x1", "view '" + cam.name + "'");
+    detail::check_mask(mask, cam, "view '" + cam.name + "'");
     mask = detail::usable(mask, params_);
     if (masks_[view]) {  // take back the old mask's votes
       vote_.remove_view(cam, &decoder_.decode(*masks_[view]));

@@ -136,9 +136,7 @@ void refine_objects(const GaussianScene& scene, const std::vector<Camera>& train
       const std::string where = "fine round (" + objects[o].name + "), view '" + cam.name + "'";
       if (seen[k]) throw Error("segmenter answered a frame twice", where);
       seen[k] = true;
-      if (m && (m->width != cam.width || m->height != cam.height || m->channels != 1))
-        throw Error("mask is " + std::to_string(m->width) + "x" + std::to_string(m->height) + ", the view is " +
-                        std::to_string(cam.width) + "x" + std::to_string(cam.height), where);
+      check_mask(m, cam, where);
       if (!m) ++results[o].diagnostics.masks_missing;
       const auto tv = Clock::now();
       refine[o]->on_mask(k - requests[q].first_frame, m, last && last->first == k ? &last->second : nullptr, renderer);
@@ -286,9 +284,7 @@ MultiSegmentation segment_objects(const GaussianScene& scene, const std::vector<
     const std::string where = "coarse round, view '" + cam.name + "', object '" + objects[q].name + "'";
     if (seen[q][k]) throw Error("segmenter answered a frame twice", where);
     seen[q][k] = true;
-    if (m && (m->width != cam.width || m->height != cam.height || m->channels != 1))
-      throw Error("mask is " + std::to_string(m->width) + "x" + std::to_string(m->height) + ", the view is " +
-                      std::to_string(cam.width) + "x" + std::to_string(cam.height), where);
+    detail::check_mask(m, cam, where);
     if (!m) ++out.objects[q].diagnostics.masks_missing;
     m = detail::usable(m, params);
     const RenderOutput* render = last && last->first == k ? &last->second : nullptr;
