@@ -2,6 +2,7 @@
 """Tables and charts of the field (bench_field), deterministically.
 
     /usr/bin/python3 benchmarks/plot_field.py [docs/results/field.csv]
+    /usr/bin/python3 benchmarks/plot_field.py --merge OUT.csv IN.csv [IN.csv ...]   (parts of a run)
 
 writes docs/results/field.md, docs/figures/field_f1_vs_time.svg and
 docs/figures/field_miou_vs_time.svg (paths relative to the repository root). Means are over the
@@ -272,7 +273,38 @@ def field_md(rows, path):
     return out
 
 
+def merge(out, inputs):
+    """Concatenates bench_field CSVs (parts of one field run) into `out`; their headers must match,
+    and no (method, variant, rig, segmenter, seed, target) may come twice."""
+    header, rows, seen = None, [], set()
+    for path in inputs:
+        with open(path, newline="") as f:
+            r = csv.reader(f)
+            h = next(r)
+            if header is None:
+                header = h
+            elif h != header:
+                sys.exit("plot_field: %s: its columns differ from %s's" % (path, inputs[0]))
+            key = [h.index(k) for k in ("method", "variant", "rig", "segmenter", "seed", "target")]
+            for row in r:
+                k = tuple(row[i] for i in key)
+                if k in seen:
+                    sys.exit("plot_field: %s: run %s comes twice" % (path, ",".join(k)))
+                seen.add(k)
+                rows.append(row)
+    with open(out, "w", newline="") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(header)
+        w.writerows(rows)
+    print("%s: %d runs from %d files" % (out, len(rows), len(inputs)))
+
+
 def main():
+    if len(sys.argv) > 1 and sys.argv[1] == "--merge":
+        if len(sys.argv) < 4:
+            sys.exit("usage: plot_field.py --merge OUT.csv IN.csv [IN.csv ...]")
+        merge(sys.argv[2], sys.argv[3:])
+        return
     path = sys.argv[1] if len(sys.argv) > 1 else os.path.join(ROOT, "docs", "results", "field.csv")
     rows = load(path)
     os.makedirs(os.path.join(ROOT, "docs", "figures"), exist_ok=True)

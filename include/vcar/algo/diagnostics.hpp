@@ -13,6 +13,7 @@
 
 #include "vcar/algo/robust_sphere.hpp"
 #include "vcar/core/camera.hpp"
+#include "vcar/core/gaussian_scene.hpp"
 
 namespace vcar {
 
@@ -68,6 +69,14 @@ struct Diagnostics {
     f("note", "note", d.note);
     f("timings_s", "timings_s", d.timings_s);
   }
+};
+
+// What vcar::segment returns (one object of vcar::segment_objects likewise).
+struct SegmentationResult {
+  std::vector<Index> indices;  // G*, ascending scene indices
+  std::vector<float> scores;   // R_i of the last vote, aligned with indices
+  LogScales log_scale;         // refined log-scales, aligned with indices
+  Diagnostics diagnostics;
 };
 
 }  // namespace vcar

@@ -1,0 +1,169 @@
+#pragma once
+// The vote of one round (Eq. 1-3, or the robust vote of docs/robust.md) and the vote of one
+// view with its mask edits (Eq. R11, R12).
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include "vcar/algo/decisive_threshold.hpp"
+#include "vcar/algo/occlusion_growth.hpp"
+#include "vcar/algo/overshoot.hpp"
+#include "vcar/algo/params.hpp"
+#include "vcar/algo/robust_voting.hpp"
+#include "vcar/algo/round.hpp"
+#include "vcar/algo/visibility_voting.hpp"
+#include "vcar/concepts/renderer.hpp"
+#include "vcar/core/camera.hpp"
+#include "vcar/core/gaussian_scene.hpp"
+#include "vcar/core/image.hpp"
+
+namespace vcar::detail {
+
+// The vote of one round: the paper's VisibilityVoting (Eq. 1-3, and the occlusion_aware
+// option), or RobustVoting when a mechanism beyond the paper is on (docs/robust.md).
+class RoundVote {
+public:
+  RoundVote(const GaussianScene& scene, const std::vector<Index>* candidates, const VcarParams& p, bool fine)
+      : occlusion_(p.occlusion_aware || (fine ? p.fine_occlusion : p.coarse_occlusion)),
+        overshoot_(p.overshoot_min > 0.f), grow_(!fine && p.grow_max > 0.f), undershoot_(fine && p.undershoot_band > 0.f),
+        gated_(undershoot_ && p.undershoot_gate) {
+    if (p.robust_vote()) {
+      // Eq. R6 needs frames rendered from the candidates alone: the fine round's.
+      const RobustVoteOptions o{p.kappa, p.foreshortening, undershoot_ ? p.undershoot_band : 0.f, p.view_reliability};
+      if (candidates) robust_.emplace(scene, *candidates, o);
+      else robust_.emplace(scene, o);
+    } else if (candidates) {
+      paper_.emplace(scene, *candidates);
+    } else {
+      paper_.emplace(scene);
+    }
+  }
+  // Eq. R3's unoccluded view count V^o of every candidate (empty without the robust vote).
+  std::span<const std::uint16_t> unoccluded_views() const {
+    return robust_ ? robust_->unoccluded_views() : std::span<const std::uint16_t>{};
+  }
+  // The view's render is needed: depth and alpha for Eq. R3, R11 and R12, alpha for Eq. R6.
+  bool wants_depth() const { return occlusion_ || overshoot_ || grow_ || undershoot_; }
+  bool occlusion() const { return occlusion_; }
+  bool overshoot() const { return overshoot_; }
+  bool grow() const { return grow_; }
+  // Masks of this round eroded by Eq. R11 (vote() counts them).
+  std::size_t overshoot_eroded() const { return overshoot_eroded_; }
+  // Switches Eq. R11 off for this round (before its first view).
+  void no_overshoot() { overshoot_ = false; }
+  void count_overshoot_eroded() { ++overshoot_eroded_; }
+  // Masks of this round grown by Eq. R12 (vote() counts them; the coarse round only).
+  std::size_t grown() const { return grown_; }
+  void count_grown() { ++grown_; }
+  // Eq. R6a of the latest view (0 when R6 is off or the view had no mask or render).
+  double last_undershoot_px() const { return robust_ && undershoot_ ? robust_->last_undershoot_px() : 0.0; }
+
+  // One view; `render` (depth + alpha) when wants_depth().
+  void add_view(const Camera& cam, const Mask* m, const RenderOutput* render, float tolerance) {
+    const ImageF* depth = render && occlusion_ ? &render->depth : nullptr;
+    const ImageF* alpha = render ? &render->alpha : nullptr;
+    if (robust_) robust_->add_view(cam, m, depth, alpha, tolerance);
+    else if (depth) paper_->add_view(cam, m, depth, alpha, tolerance);
+    else paper_->add_view(cam, m);
+  }
+  // Eq. R13: the views weighted by their agreement with the vote at tau (after the last view;
+  // nothing without view_reliability).
+  void weigh_views(float tau) {
+    if (robust_) robust_->weigh_views(tau);
+  }
+  // Eq. 3 (paper) or Eq. R2-R6 (robust): ascending scene indices and their scores.
+  // undershoot = false: the vote without Eq. R6's widening (RobustVoting::ratio).
+  void selected(float tau, std::vector<Index>& indices, std::vector<float>& scores, bool undershoot = true) const {
+    if (robust_) return robust_->selected(tau, indices, scores, undershoot);
+    paper_->selected(tau, indices, scores);
+  }
+  // The same with Eq. R7 choosing between tau and tau_strict (> tau; else tau); returns the
+  // threshold applied. With R6's gate, R7 reads the vote without R6 first: when that vote is
+  // decisive it is the result; when it splits, the vote with R6 decides as above (Eq. R6c).
+  float selected(float tau, float tau_strict, float split, std::vector<Index>& indices, std::vector<float>& scores) const {
+    undershoot_applied_ = undershoot_;
+    if (gated_ && tau_strict > tau && decided(tau, tau_strict, split, indices, scores, false) == tau_strict) {
+      undershoot_applied_ = false;                                                           // Eq. R6c
+      return tau_strict;
+    }
+    return decided(tau, tau_strict, split, indices, scores, true);
+  }
+  // Whether Eq. R6 shaped the latest selected(tau, tau_strict, ...) (false when its gate found
+  // the vote without it decisive).
+  bool undershoot_applied() const { return undershoot_applied_; }
+
+private:
+  float decided(float tau, float tau_strict, float split, std::vector<Index>& indices, std::vector<float>& scores,
+                bool undershoot) const {
+    selected(tau, indices, scores, undershoot);
+    if (!(tau_strict > tau)) return tau;
+    std::vector<Index> strict;
+    std::vector<float> strict_scores;
+    selected(tau_strict, strict, strict_scores, undershoot);
+    if (!decisive_vote(strict.size(), indices.size(), split)) return tau;                   // Eq. R7
+    indices = std::move(strict);
+    scores = std::move(strict_scores);
+    return tau_strict;
+  }
+
+  bool occlusion_, overshoot_, grow_, undershoot_, gated_;
+  std::size_t overshoot_eroded_ = 0, grown_ = 0;
+  mutable bool undershoot_applied_ = false;
+  std::optional<VisibilityVoting> paper_;
+  std::optional<RobustVoting> robust_;
+};
+
+// One vote of one view. With the occlusion test (or Eq. R11, R12) the view's expected depth comes
+// from `render` when the round kept it, else it is rendered from the same Gaussians the
+// segmenter saw. With Eq. R11 a mask that overshoots the render's occlusion edges is voted
+// eroded (a copy in `scratch`; an erosion that would take more than three quarters of the
+// mask's foreground is not applied: structures thinner than the erosion, or a mask of scattered
+// specks, are not what a dilated object looks like); with Eq. R12 (coarse round) one that stops
+// short of them is voted grown to them.
+// Returns the mask voted (m, &scratch or null): the one the caller keeps for ABR.
+template <Renderer R>
+const Mask* vote(RoundVote& voting, const Camera& cam, const Mask* m, const RenderOutput* render,
+                 const GaussianScene& scene, const std::vector<Index>* subset, R& renderer, const VcarParams& params,
+                 Mask& scratch) {
+  if (!voting.wants_depth() || !m) {
+    voting.add_view(cam, m, nullptr, params.depth_tolerance);
+    return m;
+  }
+  RenderOutput own;
+  if (!render || render->depth.empty()) {
+    own = render_view(renderer, scene, cam, subset, Eigen::Vector3f::Zero(), true);
+    render = &own;
+  }
+  if (render->depth.empty() && voting.occlusion())
+    throw Error("the occlusion test needs a renderer that returns depth", "view '" + cam.name + "'");
+  if ((voting.overshoot() || voting.grow()) && !render->depth.empty()) {
+    auto foreground = [](const Mask& x) {
+      return static_cast<std::size_t>(std::count_if(x.data.begin(), x.data.end(), [](std::uint8_t v) { return v != 0; }));
+    };
+    const std::vector<std::uint8_t> edges = occlusion_edges(render->alpha, render->depth, params.depth_tolerance);  // Eq. R11a
+    const double o = overshoot_px(*m, edges);  // Eq. R11b
+    if (voting.overshoot() && o >= static_cast<double>(params.overshoot_min)) {
+      scratch = *m;
+      erode_by_overshoot(scratch, o + static_cast<double>(params.overshoot_margin));  // Eq. R11c
+      if (4 * foreground(scratch) >= foreground(*m)) {  // thin or scattered masks are kept as they are
+        m = &scratch;
+        voting.count_overshoot_eroded();
+      }
+    } else if (voting.grow() && o < static_cast<double>(params.overshoot_min)) {
+      const int reach = growth_reach(o, foreground(*m), m->width, m->height, params.grow_max, params.grow_margin);  // Eq. R12c
+      scratch = *m;
+      if (grow_to_occlusion_edges(scratch, edges, render->alpha, render->depth, params.depth_tolerance, reach) > 0) {
+        m = &scratch;  // Eq. R12b
+        voting.count_grown();
+      }
+    }
+  }
+  voting.add_view(cam, m, render, params.depth_tolerance);
+  return m;
+}
+
+}  // namespace vcar::detail
