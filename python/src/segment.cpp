@@ -297,6 +297,28 @@ void check_callables(const py::object& renderer, const py::object& progress) {
   if (!progress.is_none() && !PyCallable_Check(progress.ptr())) throw Error("must be None or a callable", "progress");
 }
 
+// Runs `run(scene, renderer)` with the GIL released on the Python renderer (or the built-in CPU
+// one) and returns its result; an exception a Python callable raised inside comes out unchanged.
+template <class Run>
+auto run_without_gil(py::object scene_obj, Scene& scene, py::object renderer, ErrorStash& stash, Run&& run) {
+  std::optional<PythonRenderer> py_renderer;
+  if (!renderer.is_none()) py_renderer.emplace(renderer, scene_obj, stash);
+  cpu::TiledRenderer cpu_renderer;
+  decltype(run(std::declval<const GaussianScene&>(), cpu_renderer)) result{};
+  bool raised = false;
+  {
+    SceneUse use(scene);
+    py::gil_scoped_release nogil;
+    try {
+      result = py_renderer ? run(use.scene(), *py_renderer) : run(use.scene(), cpu_renderer);
+    } catch (const PythonRaised&) {
+      raised = true;
+    }
+  }
+  if (raised) stash.raise();
+  return result;
+}
+
 py::dict segment(py::object scene_obj, py::object cameras, py::object prompt, py::object segmenter,
                  py::object renderer, py::object params, py::object progress) {
   Scene& scene = scene_from(scene_obj);
@@ -310,25 +332,10 @@ py::dict segment(py::object scene_obj, py::object cameras, py::object prompt, py
   ErrorStash stash;  // before the GIL is released: destroyed after it is taken back
   std::vector<std::unique_ptr<PythonSegmenter>> keep;
   ObjectSegmenter seg = segmenter_from(segmenter, prompt_dict, stash, keep, "segmenter");
-  std::optional<PythonRenderer> py_renderer;
-  if (!renderer.is_none()) py_renderer.emplace(renderer, scene_obj, stash);
-  cpu::TiledRenderer cpu_renderer;
-
   const ProgressCallback hook = progress_hook(progress, stash);
-
-  SegmentationResult result;
-  bool raised = false;
-  {
-    SceneUse use(scene);
-    py::gil_scoped_release nogil;
-    try {
-      result = py_renderer ? vcar::segment(use.scene(), cams, pr, *py_renderer, seg, p, hook)
-                           : vcar::segment(use.scene(), cams, pr, cpu_renderer, seg, p, hook);
-    } catch (const PythonRaised&) {
-      raised = true;
-    }
-  }
-  if (raised) stash.raise();
+  SegmentationResult result = run_without_gil(scene_obj, scene, renderer, stash, [&](const GaussianScene& s, auto& r) {
+    return vcar::segment(s, cams, pr, r, seg, p, hook);
+  });
   return result_dict(std::move(result), p);
 }
 
@@ -367,25 +374,11 @@ py::dict segment_objects(py::object scene_obj, py::object cameras, py::object ob
     names.append(op.name);
     prompts.push_back(std::move(op));
   }
-  std::optional<PythonRenderer> py_renderer;
-  if (!renderer.is_none()) py_renderer.emplace(renderer, scene_obj, stash);
-  cpu::TiledRenderer cpu_renderer;
   const ProgressCallback hook = progress_hook(progress, stash);
-
-  MultiSegmentation result;
-  bool raised = false;
-  {
-    SceneUse use(scene);
-    py::gil_scoped_release nogil;
-    try {
-      EachObject<ObjectSegmenter> each(per);
-      result = py_renderer ? vcar::segment_objects(use.scene(), cams, prompts, *py_renderer, each, p, hook)
-                           : vcar::segment_objects(use.scene(), cams, prompts, cpu_renderer, each, p, hook);
-    } catch (const PythonRaised&) {
-      raised = true;
-    }
-  }
-  if (raised) stash.raise();
+  MultiSegmentation result = run_without_gil(scene_obj, scene, renderer, stash, [&](const GaussianScene& s, auto& r) {
+    EachObject<ObjectSegmenter> each(per);
+    return vcar::segment_objects(s, cams, prompts, r, each, p, hook);
+  });
   py::list out_objects;
   for (std::size_t o = 0; o < result.objects.size(); ++o) {
     py::dict r = result_dict(std::move(result.objects[o]), p);

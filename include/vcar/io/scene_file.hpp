@@ -44,11 +44,16 @@ inline std::string lower_extension(const std::filesystem::path& p) {
 }  // namespace detail
 
 namespace detail {
+// Whether the first bytes `head` (got of them) open a PLY file: "ply" and a line end.
+inline bool ply_signature(const unsigned char* head, std::size_t got) {
+  return got >= 4 && head[0] == 'p' && head[1] == 'l' && head[2] == 'y' && (head[3] == '\n' || head[3] == '\r');
+}
+
 // The format from the first bytes `head` (got of them) of a stream holding the whole file;
 // `in` is read again (from its start) for a PLY header. `name` decides only for .splat.
 inline SceneFormat scene_format_of(const unsigned char* head, std::size_t got, std::istream& in,
                                    const std::filesystem::path& name, const std::string& where) {
-  if (got >= 4 && head[0] == 'p' && head[1] == 'l' && head[2] == 'y' && (head[3] == '\n' || head[3] == '\r')) {
+  if (ply_signature(head, got)) {
     in.clear();
     in.seekg(0);
     const PlyHeader h = parse_ply_header(in, where);

@@ -70,9 +70,9 @@ namespace detail {
 
 inline bool starts_with_ply(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
-  char head[4] = {0, 0, 0, 0};
-  in.read(head, 4);
-  return in.gcount() == 4 && head[0] == 'p' && head[1] == 'l' && head[2] == 'y' && (head[3] == '\n' || head[3] == '\r');
+  unsigned char head[4] = {0, 0, 0, 0};
+  in.read(reinterpret_cast<char*>(head), 4);
+  return ply_signature(head, static_cast<std::size_t>(in.gcount()));
 }
 
 // A state PLY as a selection: the Gaussians selected and not deleted, identified in that file.
