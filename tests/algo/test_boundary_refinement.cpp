@@ -10,6 +10,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "vcar/algo/boundary_refinement.hpp"
+#include "vcar/algo/incremental_refinement.hpp"
 #include "vcar/core/rle_mask.hpp"
 
 namespace {
@@ -439,7 +440,7 @@ TEST_CASE("views decided per chunk or per Gaussian from mask tiles equal observe
   CHECK(mismatches == 0);
 }
 
-TEST_CASE("incremental refinement (carry, change_view, complete_view) equals a refinement from scratch") {
+TEST_CASE("IncrementalRefinement (carried state, change_view, complete_view) equals a refinement from scratch") {
   // A ball of Gaussians seen by 8 views with disc masks. The previous refinement held candidates
   // [0, 6000) under masks A; the next holds [1000, 7000) under masks where view 1 changed, view
   // 3 was cleared, view 5 is new and the others are unchanged.
@@ -475,8 +476,7 @@ TEST_CASE("incremental refinement (carry, change_view, complete_view) equals a r
   for (int v = 0; v < 8; ++v)
     if (after[v]) scratch.add_view(cams[v], *after[v], static_cast<std::uint16_t>(v));
 
-  vcar::BoundaryRefinement inc(g, next_cand);
-  inc.carry(prev);
+  vcar::IncrementalRefinement inc(g, next_cand, {}, prev);
   for (int v : {1, 3, 5})
     inc.change_view(cams[v], before[v] ? &*before[v] : nullptr, after[v] ? &*after[v] : nullptr, static_cast<std::uint16_t>(v));
   const auto cfs = inc.carried_fresh_stale();
@@ -484,7 +484,6 @@ TEST_CASE("incremental refinement (carry, change_view, complete_view) equals a r
   CHECK(cfs[1] == 1000);
   CHECK(cfs[2] > 20);  // some minima came from view 1 or 3: the recomputation is exercised
   CHECK(inc.incomplete());
-  CHECK_THROWS_AS(inc.carry(prev), vcar::Error);
   for (int v = 0; v < 8; ++v)
     if (after[v]) inc.complete_view(cams[v], *after[v], static_cast<std::uint16_t>(v));
   CHECK_THROWS_AS(inc.change_view(cams[0], nullptr, &*after[0], 0), vcar::Error);  // too late
@@ -502,6 +501,14 @@ TEST_CASE("incremental refinement (carry, change_view, complete_view) equals a r
   CHECK(a.axis_compressed == b.axis_compressed);
   CHECK(a.flagged == b.flagged);
   CHECK(a.compressed == b.compressed);
+
+  // A carried state carries again (Reselection chains them), here under the same masks: nothing
+  // to complete, the same result; only as an AbrState (what Reselection keeps) too.
+  const vcar::AbrState kept(std::move(inc));
+  vcar::IncrementalRefinement again(g, next_cand, {}, kept);
+  CHECK(!again.incomplete());
+  CHECK(again.carried_fresh_stale() == std::array<std::size_t, 3>{next_cand.size(), 0, 0});
+  CHECK(again.finish().log_scale == b.log_scale);
 }
 
 TEST_CASE("expect_views skips candidates whose gate cannot open, with the same result") {
@@ -570,8 +577,7 @@ TEST_CASE("expect_views skips candidates whose gate cannot open, with the same r
   more.expect_views(1);
   more.add_view(cams[0], masks[0]);
   CHECK_THROWS_AS(more.add_view(cams[1], masks[1]), vcar::Error);  // more views than announced
-  vcar::BoundaryRefinement next(g, cand);
-  CHECK_THROWS_AS(next.carry(more), vcar::Error);  // partial state cannot be carried
+  CHECK_THROWS_AS(vcar::IncrementalRefinement(g, cand, {}, more), vcar::Error);  // partial state cannot be carried
 }
 
 TEST_CASE("expect_views' gate table: least_opening_overflow is the least count that passes gate_can_open") {
@@ -649,9 +655,9 @@ TEST_CASE("defer_tracing and refine_deferred: the flagged candidates left untrac
   vcar::BoundaryRefinement started(f.scene, cand, p);
   started.add_view(f.cams[0], f.masks[0]);
   CHECK_THROWS_AS(started.defer_tracing(), vcar::Error);  // before the first view only
-  vcar::BoundaryRefinement deferring(f.scene, cand, p), next(f.scene, cand, p);
+  vcar::BoundaryRefinement deferring(f.scene, cand, p);
   deferring.defer_tracing();
-  CHECK_THROWS_AS(next.carry(deferring), vcar::Error);  // partial minima cannot be carried
+  CHECK_THROWS_AS(vcar::IncrementalRefinement(f.scene, cand, p, deferring), vcar::Error);  // partial minima
 }
 
 TEST_CASE("add_view with a run-length encoded mask equals add_view with its pixels, with tiles and without") {
@@ -743,6 +749,8 @@ TEST_CASE("bound_minimum: a bound from some of the views leaves every minimum as
   for (std::size_t k = 0; k < cand.size(); ++k) wrong.bound_minimum(k, {p.f_min, p.f_min, p.f_min});
   for (int v = 0; v < 6; ++v) wrong.add_view(f.cams[v], f.masks[v]);
   CHECK(wrong.finish().log_scale != ref.log_scale);
+  // Bounded minima do not remember the view that set them: such a state cannot be carried.
+  CHECK_THROWS_AS(vcar::IncrementalRefinement(f.scene, cand, p, wrong), vcar::Error);
 
   vcar::BoundaryRefinement started(f.scene, cand, p);
   started.add_view(f.cams[0], f.masks[0]);

@@ -9,7 +9,7 @@
 // renderer and a segmenter, which vcar::segment has) and runs ABR (Eq. 9-14) on the views with
 // masks. The result equals vcar::segment's with the same masks and SSS off.
 //
-// ABR is incremental too (BoundaryRefinement::carry): select() keeps the refinement it ran, and
+// ABR is incremental too (IncrementalRefinement): select() keeps the refinement it ran, and
 // the next select() carries the state of the Gaussians both selections hold, takes back and
 // re-adds only the views whose masks changed, and observes every view only for the Gaussians
 // that entered the selection (or whose minimum factor came from a changed view). When more than
@@ -28,6 +28,9 @@
 #include <utility>
 #include <vector>
 
+#include "vcar/algo/abr_state.hpp"
+#include "vcar/algo/boundary_refinement.hpp"
+#include "vcar/algo/incremental_refinement.hpp"
 #include "vcar/algo/pipeline.hpp"
 
 namespace vcar {
@@ -136,11 +139,11 @@ private:
       if (masks_[j]) with_mask.push_back(j), diag.mask_store_bytes += masks_[j]->bytes();
     }
     stats_.views_changed = changed.size();
-    BoundaryRefinement abr(*scene_, selected, params_.abr());
     auto view_id = [](std::size_t j) { return static_cast<std::uint16_t>(j); };
+    AbrResult a;
     if (incremental_abr_ && abr_ && 2 * changed.size() < std::max<std::size_t>(with_mask.size(), 1)) {
       stats_.abr_incremental = true;
-      abr.carry(*abr_);
+      IncrementalRefinement abr(*scene_, selected, params_.abr(), *abr_);
       MaskDecoder old_decoder;
       for (std::size_t j : changed)
         abr.change_view(cameras_[j], abr_masks_[j] ? &old_decoder.decode(*abr_masks_[j]) : nullptr,
@@ -148,17 +151,16 @@ private:
       const auto cfs = abr.carried_fresh_stale();
       stats_.carried = cfs[0] + cfs[2], stats_.fresh = cfs[1], stats_.stale = cfs[2];
       if (abr.incomplete())
-        for (std::size_t j : with_mask) {
-          abr.complete_view(cameras_[j], decoder_.decode(*masks_[j]), view_id(j));
-        }
+        for (std::size_t j : with_mask) abr.complete_view(cameras_[j], decoder_.decode(*masks_[j]), view_id(j));
+      a = abr.finish();
+      abr_.emplace(std::move(abr));
     } else {
       stats_.fresh = selected.size();
-      for (std::size_t j : with_mask) {
-        abr.add_view(cameras_[j], decoder_.decode(*masks_[j]), view_id(j));
-      }
+      BoundaryRefinement abr(*scene_, selected, params_.abr());
+      for (std::size_t j : with_mask) abr.add_view(cameras_[j], decoder_.decode(*masks_[j]), view_id(j));
+      a = abr.finish();
+      abr_.emplace(std::move(abr));
     }
-    AbrResult a = abr.finish();
-    abr_.emplace(std::move(abr));
     abr_masks_ = masks_;
     diag.abr_flagged = a.flagged;
     diag.abr_compressed = a.compressed;
@@ -172,7 +174,7 @@ private:
   VisibilityVoting vote_;
   std::vector<MaskRef> masks_;      // the masks set, run-length encoded (shared, never changed)
   std::vector<MaskRef> abr_masks_;  // the masks that abr_ saw
-  std::optional<BoundaryRefinement> abr_;  // the latest select()'s refinement
+  std::optional<AbrState> abr_;  // the latest select()'s refinement (either driver's state)
   ReselectionStats stats_;
   bool incremental_abr_ = true;
   MaskDecoder decoder_;
