@@ -127,6 +127,26 @@ std::size_t vertex_count(const std::vector<std::uint8_t>& ply) {
   const auto at = head.find("element vertex ");
   return at == std::string::npos ? 0 : std::stoul(head.substr(at + 15));
 }
+// Eight cameras on a ring around both balls, loaded into `s` as cameras.json bytes.
+std::size_t load_ring_cameras(vcar::web::Session& s) {
+  const auto p = std::filesystem::temp_directory_path() / "vcar_web_test_cameras.json";
+  std::vector<vcar::Camera> cams;
+  for (int k = 0; k < 8; ++k) {
+    const float a = 6.2831853f * k / 8;
+    cams.push_back(vcar::Camera::look_at(Eigen::Vector3f(4 * std::sin(a), -1.f, -4 * std::cos(a)), {0, 0, 0}, {0, -1, 0},
+                                         {160, 120, 150.f, 150.f, 80.f, 60.f}, "cam" + std::to_string(k)));
+  }
+  vcar::io::write_cameras_json(p, cams);
+  std::ifstream in(p, std::ios::binary);
+  const std::vector<std::uint8_t> b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::filesystem::remove(p);
+  return s.load_cameras(b, "cameras.json");
+}
+// Pixel of world point x in camera c.
+Eigen::Vector2f pixel_of(const vcar::Camera& c, const Eigen::Vector3f& x) {
+  const Eigen::Vector3f q = c.to_camera(x);
+  return {c.fx * q.x() / q.z() + c.cx, c.fy * q.y() / q.z() + c.cy};
+}
 }  // namespace
 
 TEST_CASE("the browser session selects the clicked ball, with orbit views and with cameras.json", "[web]") {
@@ -155,25 +175,48 @@ TEST_CASE("the browser session selects the clicked ball, with orbit views and wi
     CHECK(vertex_count(s.state_ply()) == 2 * n);
   }
   SECTION("cameras.json, the click on the named view") {
-    const auto p = std::filesystem::temp_directory_path() / "vcar_web_test_cameras.json";
-    std::vector<vcar::Camera> cams;
-    for (int k = 0; k < 8; ++k) {
-      const float a = 6.2831853f * k / 8;
-      cams.push_back(vcar::Camera::look_at(Eigen::Vector3f(4 * std::sin(a), -1.f, -4 * std::cos(a)), {0, 0, 0}, {0, -1, 0},
-                                           {160, 120, 150.f, 150.f, 80.f, 60.f}, "cam" + std::to_string(k)));
-    }
-    vcar::io::write_cameras_json(p, cams);
-    std::ifstream in(p, std::ios::binary);
-    const std::vector<std::uint8_t> b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    std::filesystem::remove(p);
-    REQUIRE(s.load_cameras(b, "cameras.json") == 8);
+    REQUIRE(load_ring_cameras(s) == 8);
     const vcar::Camera view = vcar::web::reference_view(s, "cam0");
-    // the red ball's centre in cam0's pixels
-    const Eigen::Vector3f pc = view.to_camera({-1, 0, 0});
-    const auto& r = s.segment(view, view.fx * pc.x() / pc.z() + view.cx, view.fy * pc.y() / pc.z() + view.cy, opt);
+    const Eigen::Vector2f red = pixel_of(view, {-1, 0, 0});  // the red ball's centre in cam0's pixels
+    const auto& r = s.segment(view, red.x(), red.y(), opt);
     CHECK(s.views().size() == 8);  // the named view is the reference, not added twice
     check_red(r);
     CHECK_THROWS_AS(vcar::web::reference_view(s, "nope"), vcar::Error);
+  }
+  SECTION("several objects through vcar::segment_objects: each as segment selects it alone") {
+    REQUIRE(load_ring_cameras(s) == 8);
+    const vcar::Camera view = vcar::web::reference_view(s, "cam0");
+    const Eigen::Vector2f red = pixel_of(view, {-1, 0, 0}), blue = pixel_of(view, {1, 0, 0});
+    const std::vector<vcar::Index> alone = s.segment(view, red.x(), red.y(), opt).indices;
+    const auto& m = s.segment_objects(view, {{red.x(), red.y(), {}, "red"}, {blue.x(), blue.y(), {}, ""}}, opt);
+    REQUIRE(m.objects.size() == 2);
+    CHECK(m.objects[0].indices == alone);  // no Gaussian shared: each object's result is segment's
+    CHECK(m.conflicts == 0);
+    std::size_t blue_kept = 0;
+    for (auto i : m.objects[1].indices) blue_kept += i >= static_cast<vcar::Index>(n);
+    CHECK(blue_kept == m.objects[1].indices.size());
+    CHECK(blue_kept >= static_cast<std::size_t>(n) * 8 / 10);
+    CHECK_THROWS_AS(s.result(), vcar::Error);  // the single-object result went with the new call
+    // The host's hook is asked per object, with that object's box in every frame it sees.
+    std::set<std::size_t> asked;
+    const auto& h = s.segment_objects(view, {{red.x(), red.y(), {}, "red"}, {blue.x(), blue.y(), {}, "blue"}}, opt, {},
+        [&](std::size_t object, std::size_t, const vcar::Camera& c, const vcar::ImageRGB8&, const vcar::Prompt&, bool,
+            const vcar::web::FrameBox& box) -> std::optional<Mask> {
+          asked.insert(object);
+          if (!box) return std::nullopt;
+          Mask mask(c.width, c.height, 1, 0);
+          for (int y = std::max(0, static_cast<int>((*box)[1])); y < std::min(c.height, static_cast<int>((*box)[3])); ++y)
+            for (int x = std::max(0, static_cast<int>((*box)[0])); x < std::min(c.width, static_cast<int>((*box)[2])); ++x)
+              mask(x, y) = 255;
+          return mask;
+        });
+    CHECK(asked == std::set<std::size_t>{0, 1});
+    REQUIRE(h.objects.size() == 2);
+    std::size_t red_in_red = 0;
+    for (auto i : h.objects[0].indices) red_in_red += i < static_cast<vcar::Index>(n);
+    CHECK(red_in_red > static_cast<std::size_t>(n) / 2);  // box masks: most of the red ball,
+    CHECK(red_in_red * 10 >= h.objects[0].indices.size() * 9);  // little else
+    CHECK_THROWS_WITH(s.segment_objects(view, {}, opt), Catch::Contains("prompt"));
   }
   SECTION("transforms.json gives the same cameras") {
     const auto dir = std::filesystem::temp_directory_path() / "vcar_web_test_transforms";

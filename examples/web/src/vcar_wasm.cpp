@@ -7,6 +7,8 @@
 //   s.loadCameras(bytes, "cameras.json");       // or transforms.json; optional
 //   const cam = s.referenceView("NAME");        // or s.defaultView(w, h), or a camera from the viewer
 //   s.segment(cam, u, v, {maxSide: 400}, p => postMessage(p));   // progress: {stage, view, views, elapsed}
+//   s.segmentObjects(cam, [{click: [u, v]}, {box: [x0, y0, x1, y1]}], {}, null);  // several at once
+//   s.objectIndices(k);                         // Uint32Array: object k of the latest segmentObjects
 //   s.render(cam);                              // {width, height, rgb, alpha, depth}: vcar's own render
 //   s.indices(); s.scores(); s.logScales();     // Uint32Array, Float32Array, Float32Array (3 x n)
 //   s.objectPly(); s.removedPly(); s.statePly();// Uint8Array (Inria PLY; state PLY for SuperSplat)
@@ -71,74 +73,49 @@ public:
   val defaultView(int w, int h) const { return camera_to_js(s_.default_view(w, h)); }
 
   // Runs vcar::segment; `progress(p)` gets {stage, view, views, elapsed} between stages and views.
+  // u or v NaN: no click (options.box is the prompt).
   val segment(const val& camera, float u, float v, const val& options, const val& progress) {
-    vcar::web::SegmentOptions opt;
-    if (options.typeOf().as<std::string>() == "object") {
-      if (!options["maxSide"].isUndefined()) opt.max_side = options["maxSide"].as<int>();
-      if (!options["orbitViews"].isUndefined()) opt.orbit_views = options["orbitViews"].as<int>();
-      if (!options["colourTol"].isUndefined()) opt.grow.colour_tol = options["colourTol"].as<float>();
-      if (!options["depthStep"].isUndefined()) opt.grow.depth_step = options["depthStep"].as<float>();
-      if (!options["box"].isUndefined() && !options["box"].isNull()) {
-        const std::vector<float> b = emscripten::convertJSArrayToNumberVector<float>(options["box"]);
-        if (b.size() != 4) throw vcar::Error("must be [x0, y0, x1, y1]", "options.box");
-        opt.box = Eigen::Vector4f(b[0], b[1], b[2], b[3]);
-      }
-    }
-    vcar::ProgressCallback cb;
-    if (progress.typeOf().as<std::string>() == "function")
-      cb = [&](const vcar::Progress& p) {
-        val o = val::object();
-        o.set("stage", std::string(p.stage));
-        o.set("view", static_cast<int>(p.view));
-        o.set("views", static_cast<int>(p.views));
-        o.set("elapsed", p.elapsed_s);
-        const val r = progress(o);
-        return !(r.isFalse());
-      };
-    // The JavaScript segmenter hook (docs/web.md): options.segmenter(frame) -> Uint8Array | null,
-    // frame = {index, camera, width, height, rgb (Uint8Array, w*h*3), click: [u, v] | null,
-    // box: [x0, y0, x1, y1] | null, fine} (fine: the fine round, whose frames render the coarse
-    // selection only; box: the prompt's box in this frame, lifted from the reference view).
-    // u or v NaN: no click (options.box is the prompt).
-    vcar::web::FrameMaskFn custom;
-    if (options.typeOf().as<std::string>() == "object" && options["segmenter"].typeOf().as<std::string>() == "function") {
-      const val fn = options["segmenter"];
-      custom = [fn](std::size_t k, const vcar::Camera& cam, const vcar::ImageRGB8& rgb, const vcar::Prompt& p, bool subset,
-                    const vcar::web::FrameBox& box) -> std::optional<vcar::Mask> {
-        val f = val::object();
-        f.set("index", static_cast<int>(k));
-        f.set("camera", camera_to_js(cam));
-        f.set("width", cam.width);
-        f.set("height", cam.height);
-        f.set("rgb", typed_copy(rgb.data));
-        if (!p.points.empty()) {
-          val click = val::array();
-          click.call<void>("push", p.points.front()[0]);
-          click.call<void>("push", p.points.front()[1]);
-          f.set("click", click);
-        } else {
-          f.set("click", val::null());
-        }
-        if (box) {
-          val b = val::array();
-          for (int c = 0; c < 4; ++c) b.call<void>("push", (*box)[c]);
-          f.set("box", b);
-        } else {
-          f.set("box", val::null());
-        }
-        f.set("fine", subset);
-        const val m = fn(f);
-        if (m.isNull() || m.isUndefined()) return std::nullopt;
-        vcar::Mask mask(cam.width, cam.height, 1);
-        mask.data = emscripten::convertJSArrayToNumberVector<std::uint8_t>(m);
-        if (mask.data.size() != mask.pixels())
-          throw vcar::Error("the JavaScript segmenter returned " + std::to_string(mask.data.size()) + " bytes for a " +
-                            std::to_string(cam.width) + "x" + std::to_string(cam.height) + " frame", "options.segmenter");
-        return mask;
-      };
-    }
-    const vcar::SegmentationResult& r = s_.segment(camera_from_js(camera), u, v, opt, cb, custom);
+    const vcar::web::FrameMaskFn custom = frame_hook(options, val::null());
+    const vcar::SegmentationResult& r = s_.segment(camera_from_js(camera), u, v, options_of(options), progress_of(progress), custom);
     return diagnostics_of(r);
+  }
+  // Several objects in one run (vcar::segment_objects): prompts = [{click: [u, v] | null,
+  // box: [x0, y0, x1, y1] | null, name}], each on `camera`. Returns one diagnostics object per
+  // prompt; objectIndices(k) gives object k's selection. The segmenter hook's frame gets
+  // `object` (the prompt's index).
+  val segmentObjects(const val& camera, const val& prompts, const val& options, const val& progress) {
+    std::vector<vcar::web::ObjectClick> objects;
+    const int count = prompts["length"].as<int>();
+    for (int k = 0; k < count; ++k) {
+      const val q = prompts[k];
+      vcar::web::ObjectClick o;
+      if (!q["click"].isUndefined() && !q["click"].isNull()) {
+        const std::vector<float> c = emscripten::convertJSArrayToNumberVector<float>(q["click"]);
+        if (c.size() != 2) throw vcar::Error("must be [u, v]", "prompts[" + std::to_string(k) + "].click");
+        o.u = c[0], o.v = c[1];
+      }
+      o.box = box_of(q["box"], "prompts[" + std::to_string(k) + "].box");
+      if (!q["name"].isUndefined()) o.name = q["name"].as<std::string>();
+      objects.push_back(std::move(o));
+    }
+    vcar::web::ObjectFrameMaskFn custom;
+    if (is_function(options, "segmenter"))
+      custom = [options](std::size_t object, std::size_t k, const vcar::Camera& cam, const vcar::ImageRGB8& rgb,
+                         const vcar::Prompt& p, bool subset, const vcar::web::FrameBox& box) {
+        return frame_hook(options, val(static_cast<int>(object)))(k, cam, rgb, p, subset, box);
+      };
+    const vcar::MultiSegmentation& m = s_.segment_objects(camera_from_js(camera), objects, options_of(options),
+                                                          progress_of(progress), custom);
+    val out = val::array();
+    for (const vcar::SegmentationResult& r : m.objects) out.call<void>("push", diagnostics_of(r));
+    return out;
+  }
+  val objectIndices(int k) const {
+    const auto& objects = s_.objects().objects;
+    if (k < 0 || static_cast<std::size_t>(k) >= objects.size())
+      throw vcar::Error("no object " + std::to_string(k) + " (" + std::to_string(objects.size()) + " segmented)", "objectIndices");
+    const auto& ix = objects[static_cast<std::size_t>(k)].indices;
+    return typed_copy(std::vector<std::uint32_t>(ix.begin(), ix.end()));
   }
   // {width, height, rgb: Uint8Array (w*h*3), alpha: Float32Array, depth: Float32Array (expected depth)}
   val render(const val& camera) const {
@@ -174,6 +151,82 @@ public:
   val statePly() { return typed_copy(s_.state_ply()); }
 
 private:
+  static bool is_object(const val& v) { return v.typeOf().as<std::string>() == "object" && !v.isNull(); }
+  static bool is_function(const val& options, const char* key) {
+    return is_object(options) && options[key].typeOf().as<std::string>() == "function";
+  }
+  static std::optional<Eigen::Vector4f> box_of(const val& b, const std::string& where) {
+    if (b.isUndefined() || b.isNull()) return std::nullopt;
+    const std::vector<float> x = emscripten::convertJSArrayToNumberVector<float>(b);
+    if (x.size() != 4) throw vcar::Error("must be [x0, y0, x1, y1]", where);
+    return Eigen::Vector4f(x[0], x[1], x[2], x[3]);
+  }
+  static vcar::web::SegmentOptions options_of(const val& options) {
+    vcar::web::SegmentOptions opt;
+    if (!is_object(options)) return opt;
+    if (!options["maxSide"].isUndefined()) opt.max_side = options["maxSide"].as<int>();
+    if (!options["orbitViews"].isUndefined()) opt.orbit_views = options["orbitViews"].as<int>();
+    if (!options["colourTol"].isUndefined()) opt.grow.colour_tol = options["colourTol"].as<float>();
+    if (!options["depthStep"].isUndefined()) opt.grow.depth_step = options["depthStep"].as<float>();
+    opt.box = box_of(options["box"], "options.box");
+    return opt;
+  }
+  // progress(p) gets {stage, view, views, elapsed}; returning false cancels.
+  static vcar::ProgressCallback progress_of(const val& progress) {
+    if (progress.typeOf().as<std::string>() != "function") return {};
+    return [progress](const vcar::Progress& p) {
+      val o = val::object();
+      o.set("stage", std::string(p.stage));
+      o.set("view", static_cast<int>(p.view));
+      o.set("views", static_cast<int>(p.views));
+      o.set("elapsed", p.elapsed_s);
+      const val r = progress(o);
+      return !(r.isFalse());
+    };
+  }
+  // The JavaScript segmenter hook (docs/web.md): options.segmenter(frame) -> Uint8Array | null,
+  // frame = {index, camera, width, height, rgb (Uint8Array, w*h*3), click: [u, v] | null,
+  // box: [x0, y0, x1, y1] | null, fine, object} (fine: the fine round, whose frames render the
+  // coarse selection only; box: the prompt's box in this frame, lifted from the reference view;
+  // object: the prompt's index with segmentObjects, else null). None without options.segmenter.
+  static vcar::web::FrameMaskFn frame_hook(const val& options, const val& object) {
+    if (!is_function(options, "segmenter")) return {};
+    const val fn = options["segmenter"];
+    return [fn, object](std::size_t k, const vcar::Camera& cam, const vcar::ImageRGB8& rgb, const vcar::Prompt& p, bool subset,
+                        const vcar::web::FrameBox& box) -> std::optional<vcar::Mask> {
+      val f = val::object();
+      f.set("index", static_cast<int>(k));
+      f.set("camera", camera_to_js(cam));
+      f.set("width", cam.width);
+      f.set("height", cam.height);
+      f.set("rgb", typed_copy(rgb.data));
+      if (!p.points.empty()) {
+        val click = val::array();
+        click.call<void>("push", p.points.front()[0]);
+        click.call<void>("push", p.points.front()[1]);
+        f.set("click", click);
+      } else {
+        f.set("click", val::null());
+      }
+      if (box) {
+        val b = val::array();
+        for (int c = 0; c < 4; ++c) b.call<void>("push", (*box)[c]);
+        f.set("box", b);
+      } else {
+        f.set("box", val::null());
+      }
+      f.set("fine", subset);
+      f.set("object", object);
+      const val m = fn(f);
+      if (m.isNull() || m.isUndefined()) return std::nullopt;
+      vcar::Mask mask(cam.width, cam.height, 1);
+      mask.data = emscripten::convertJSArrayToNumberVector<std::uint8_t>(m);
+      if (mask.data.size() != mask.pixels())
+        throw vcar::Error("the JavaScript segmenter returned " + std::to_string(mask.data.size()) + " bytes for a " +
+                          std::to_string(cam.width) + "x" + std::to_string(cam.height) + " frame", "options.segmenter");
+      return mask;
+    };
+  }
   static val diagnostics_of(const vcar::SegmentationResult& r) {
     const auto& d = r.diagnostics;
     val o = val::object();
@@ -221,6 +274,8 @@ EMSCRIPTEN_BINDINGS(vcar_web) {
       .function("referenceView", &JsSession::referenceView)
       .function("defaultView", &JsSession::defaultView)
       .function("segment", &JsSession::segment)
+      .function("segmentObjects", &JsSession::segmentObjects)
+      .function("objectIndices", &JsSession::objectIndices)
       .function("render", &JsSession::render)
       .function("indices", &JsSession::indices)
       .function("scores", &JsSession::scores)

@@ -1,14 +1,17 @@
 // The browser flow run natively: the same Session, segmenter and parameters as the WebAssembly
 // build, for the browser test (same selection?) and the browser-vs-native benchmark.
-//   vcar_web_native --scene FILE [--cameras FILE] [--view NAME] (--click U,V | --box X0,Y0,X1,Y1 | both)
-//                   [--segmenter region|grabcut] [--max-side N] [--orbit-views N] [--out result.json]
+//   vcar_web_native --scene FILE [--cameras FILE] [--view NAME] (--click U,V | --box X0,Y0,X1,Y1 | both
+//                   | --objects U,V;U,V;...) [--segmenter region|grabcut] [--max-side N] [--orbit-views N]
+//                   [--out result.json]
 // --segmenter grabcut (where OpenCV is found): vcar::opencv::grabcut on each frame's box, what
 // the page's grabcut.js does with OpenCV's WebAssembly build; region (the default here): vcar's
 // colour + depth region growing, as the page's fallback.
 //   vcar_web_native --convert IN OUT      (any scene format -> .ply / .splat / .spz by OUT's
 //                                          extension: inputs for the browser format tests)
 // Prints (and writes to --out) {"selected": n, "seconds": t, "indices": [...]}: the page's
-// #vcar-result format; seconds covers vcar::segment only, as in the page.
+// #vcar-result format; seconds covers vcar::segment only, as in the page. With --objects (a click
+// per object, vcar::segment_objects as the page's objects=): {"objects": [{"selected": n,
+// "indices": [...]}, ...], "seconds": t}.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -32,7 +35,7 @@ std::vector<std::uint8_t> slurp(const std::string& p) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string scene, cameras, view, click, box, segmenter = "region", out;
+  std::string scene, cameras, view, click, box, objects, segmenter = "region", out;
   vcar::web::SegmentOptions opt;
   if (argc == 4 && std::string(argv[1]) == "--convert") {
     try {
@@ -54,14 +57,16 @@ int main(int argc, char** argv) {
     else if (a == "--view") view = next();
     else if (a == "--click") click = next();
     else if (a == "--box") box = next();
+    else if (a == "--objects") objects = next();
     else if (a == "--segmenter") segmenter = next();
     else if (a == "--out") out = next();
     else if (a == "--max-side") opt.max_side = std::stoi(next());
     else if (a == "--orbit-views") opt.orbit_views = std::stoi(next());
     else { std::cerr << "unknown argument " << a << "\n"; return 2; }
   }
-  if (scene.empty() || (click.empty() && box.empty()) || (segmenter != "region" && segmenter != "grabcut")) {
-    std::cerr << "usage: vcar_web_native --scene FILE [--cameras FILE] [--view NAME] (--click U,V | --box X0,Y0,X1,Y1)"
+  if (scene.empty() || (click.empty() && box.empty() && objects.empty()) || (segmenter != "region" && segmenter != "grabcut")) {
+    std::cerr << "usage: vcar_web_native --scene FILE [--cameras FILE] [--view NAME] (--click U,V | --box X0,Y0,X1,Y1"
+                 " | --objects U,V;U,V)"
                  " [--segmenter region|grabcut] [--out FILE]\n";
     return 2;
   }
@@ -94,13 +99,44 @@ int main(int argc, char** argv) {
       throw vcar::Error("this build has no OpenCV (Debian libopencv-dev)", "--segmenter grabcut");
 #endif
     }
-    const auto t0 = std::chrono::steady_clock::now();
-    const vcar::SegmentationResult& r = s.segment(ref, u, v, opt, {}, custom);
-    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    auto indices_json = [](std::ostringstream& j, const std::vector<vcar::Index>& ix) {
+      j << "\"selected\": " << ix.size() << ", \"indices\": [";
+      for (std::size_t i = 0; i < ix.size(); ++i) j << (i ? "," : "") << ix[i];
+      j << "]";
+    };
     std::ostringstream j;
-    j << "{\"selected\": " << r.indices.size() << ", \"seconds\": " << secs << ", \"indices\": [";
-    for (std::size_t i = 0; i < r.indices.size(); ++i) j << (i ? "," : "") << r.indices[i];
-    j << "]}";
+    const auto t0 = std::chrono::steady_clock::now();
+    auto seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
+    if (!objects.empty()) {
+      std::vector<vcar::web::ObjectClick> prompts;
+      std::istringstream list(objects);
+      for (std::string c; std::getline(list, c, ';');) {
+        vcar::web::ObjectClick o;
+        if (std::sscanf(c.c_str(), "%f,%f", &o.u, &o.v) != 2) throw vcar::Error("expected U,V;U,V;...", "--objects " + objects);
+        prompts.push_back(o);
+      }
+      vcar::web::ObjectFrameMaskFn per_object;
+      if (custom)
+        per_object = [&custom](std::size_t, std::size_t k, const vcar::Camera& c, const vcar::ImageRGB8& im,
+                               const vcar::Prompt& p, bool subset, const vcar::web::FrameBox& b) {
+          return custom(k, c, im, p, subset, b);
+        };
+      const vcar::MultiSegmentation& m = s.segment_objects(ref, prompts, opt, {}, per_object);
+      const double secs = seconds();
+      j << "{\"objects\": [";
+      for (std::size_t o = 0; o < m.objects.size(); ++o) {
+        j << (o ? ", {" : "{");
+        indices_json(j, m.objects[o].indices);
+        j << "}";
+      }
+      j << "], \"seconds\": " << secs << "}";
+    } else {
+      const vcar::SegmentationResult& r = s.segment(ref, u, v, opt, {}, custom);
+      const double secs = seconds();
+      j << "{";
+      indices_json(j, r.indices);
+      j << ", \"seconds\": " << secs << "}";
+    }
     std::cout << j.str() << "\n";
     if (!out.empty()) std::ofstream(out) << j.str() << "\n";
   } catch (const std::exception& e) {

@@ -4,7 +4,8 @@
 // C++ on vcar::vcar and vcar::io, so the browser build and the native build run the same code.
 //
 // Flow: load_scene(bytes) -> load_cameras(bytes) (optional) -> segment(reference, click) ->
-// indices / scores / log-scales -> object_ply / removed_ply / state_ply (bytes).
+// indices / scores / log-scales -> object_ply / removed_ply / state_ply (bytes); or
+// segment_objects(reference, clicks) -> objects() (one result per object, vcar::segment_objects).
 // Scenes and cameras are read from bytes (vcar::io's readers take both); the PLY downloads are
 // written through a scratch folder (emscripten's in-memory file system in the browser), because
 // vcar::io's writers write files.
@@ -17,8 +18,10 @@
 #include <fstream>
 #include <functional>
 #include <iterator>
+#include <memory>
 #include <numeric>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -27,6 +30,8 @@
 #include "region_grow_segmenter.hpp"
 #include "vcar/algo/pipeline.hpp"
 #include "vcar/algo/prompt_lift.hpp"
+#include "vcar/algo/segment_objects.hpp"
+#include "vcar/concepts/multi_segmenter.hpp"
 #include "vcar/backends/cpu/tiled_renderer.hpp"
 #include "vcar/io/cameras.hpp"
 #include "vcar/io/ply.hpp"
@@ -45,6 +50,17 @@ using FrameBox = std::optional<Eigen::Vector4f>;
 using FrameMaskFn =
     std::function<std::optional<Mask>(std::size_t frame, const Camera&, const ImageRGB8&, const Prompt&, bool subset, const FrameBox& box)>;
 
+// One object's prompt on the reference view for Session::segment_objects: a click (u, v; NaN:
+// none), a box, or both; `name` names it in the result (default object_K).
+struct ObjectClick {
+  float u = NAN, v = NAN;
+  std::optional<Eigen::Vector4f> box;
+  std::string name;
+};
+// segment_objects' host segmenter: FrameMaskFn for one object, `object` its index.
+using ObjectFrameMaskFn = std::function<std::optional<Mask>(std::size_t object, std::size_t frame, const Camera&,
+                                                            const ImageRGB8&, const Prompt&, bool subset, const FrameBox& box)>;
+
 struct SegmentOptions {
   int max_side = 400;       // vcar renders the views at most this many pixels on the long side
   int orbit_views = 16;     // views around the clicked point when no cameras were loaded
@@ -55,6 +71,22 @@ struct SegmentOptions {
   std::optional<Eigen::Vector4f> box;
   float box_margin = 0.1f;    // lifted boxes padded by this share of their size (a box prompt)
   float point_margin = 0.5f;  // the same for a click (it lifts part of the object)
+};
+
+// The host's FrameMaskFn as a Segmenter: each frame asked with the prompt's box in it, the
+// prompt lifted to 3D on the reference view (`lifted`; none: the reference's own box only) and
+// boxed in the frame (training and sampled) with `margin` of its size.
+struct HostSegmenter {
+  std::optional<LiftedPrompt> lifted;
+  float margin = 0.f;
+  FrameMaskFn custom;
+  void segment(const FrameSequence& f, const Prompt& p, const MaskSink& sink) {
+    for (std::size_t k = 0; k < f.size(); ++k) {
+      const FrameBox box = lifted ? lifted->box_for(f.cameras[k], margin) : k == 0 ? p.box : FrameBox{};
+      const std::optional<Mask> m = custom(k, f.cameras[k], f.image(k), p, f.subset, box);
+      sink(k, m ? &*m : nullptr);
+    }
+  }
 };
 
 class Session {
@@ -123,59 +155,46 @@ public:
   // No click (u or v not finite): options.box alone is the prompt.
   const SegmentationResult& segment(const Camera& reference, float u, float v, const SegmentOptions& options = {},
                                     const ProgressCallback& progress = {}, const FrameMaskFn& custom = {}) {
-    require_scene();
-    reference.validate();
-    const float s = std::min(1.f, static_cast<float>(options.max_side) / static_cast<float>(std::max(reference.width, reference.height)));
-    const Camera ref = scaled(reference, s);
-    cpu::TiledRenderer base;
-    DepthKeepingRenderer<cpu::TiledRenderer> renderer(base);
-    RegionGrowSegmenter<cpu::TiledRenderer> segmenter(renderer, options.grow);
-    std::vector<Camera> views;
-    Prompt prompt;
-    if (std::isfinite(u) && std::isfinite(v)) {
-      prompt.points = {Eigen::Vector2f(u * s, v * s)};
-      prompt.point_labels = {1};
-    }
-    if (options.box) {
-      const Eigen::Vector4f& b = *options.box;
-      if (!b.allFinite() || !(b[2] > b[0] && b[3] > b[1])) throw Error("the box is empty or not finite (needs x0 < x1, y0 < y1)", "prompt");
-      prompt.box = b * s;
-    }
-    if (prompt.points.empty() && !prompt.box) throw Error("no prompt: give a click or a box", "prompt");
-    if (prompt.points.empty() && !custom) throw Error("the region-growing segmenter needs a click (a box needs another segmenter)", "prompt");
-    // Where the views circle (without cameras): the click, else the box's centre.
-    const Eigen::Vector2f anchor = !prompt.points.empty() ? prompt.points[0] : Eigen::Vector2f(0.5f * ((*prompt.box)[0] + (*prompt.box)[2]), 0.5f * ((*prompt.box)[1] + (*prompt.box)[3]));
-    if (!cameras_.empty()) {
-      views.push_back(ref);
-      for (const Camera& c : cameras_)
-        if (!(c.name == reference.name && c.R_w.isApprox(reference.R_w) && c.t_w.isApprox(reference.t_w)))
-          views.push_back(scaled(c, std::min(1.f, static_cast<float>(options.max_side) / static_cast<float>(std::max(c.width, c.height)))));
-    } else {
-      views = orbit_around_click(ref, anchor, renderer, options.orbit_views);
-    }
-    prompt.reference_view = 0;
-    views_ = views;
+    const Setup setup = prepare(reference, {ObjectClick{u, v, options.box, {}}}, options, !custom);
+    objects_.reset();
     if (custom) {
-      // The prompt in 3D, boxed in each frame the host is asked about (training and sampled).
-      std::optional<LiftedPrompt> lifted;
-      try {
-        lifted = lift_prompt(scene_, ref, prompt, base);
-      } catch (const Error& e) {
-        std::fprintf(stderr, "vcar: warning: the prompt could not be lifted to 3D (%s): frames get no box\n", e.what());
-      }
-      const float margin = prompt.box ? options.box_margin : options.point_margin;
-      auto host = make_streaming_segmenter([&](const FrameSequence& f, const Prompt& p, const MaskSink& sink) {
-        for (std::size_t k = 0; k < f.size(); ++k) {
-          const FrameBox box = lifted ? lifted->box_for(f.cameras[k], margin) : k == 0 ? p.box : FrameBox{};
-          const std::optional<Mask> m = custom(k, f.cameras[k], f.image(k), p, f.subset, box);
-          sink(k, m ? &*m : nullptr);
-        }
-      });
-      result_ = vcar::segment(scene_, views, prompt, renderer, host, VcarParams::robust(), progress);
+      auto host = host_segmenter(setup, 0, options, custom);
+      result_ = vcar::segment(scene_, views_, setup.prompts[0], *setup.renderer, host, VcarParams::robust(), progress);
     } else {
-      result_ = vcar::segment(scene_, views, prompt, renderer, segmenter, VcarParams::robust(), progress);
+      RegionGrowSegmenter<cpu::TiledRenderer> segmenter(*setup.renderer, options.grow);
+      result_ = vcar::segment(scene_, views_, setup.prompts[0], *setup.renderer, segmenter, VcarParams::robust(), progress);
     }
     return *result_;
+  }
+
+  // Several objects at once (vcar::segment_objects: one coarse round for all, conflicts resolved
+  // by score), each prompted on `reference` like segment's (options.box is not read: each object
+  // has its own). Without cameras the views circle the first object. `custom(object, frame, ...)`
+  // answers for one object at a time (object: its index in `objects`).
+  const MultiSegmentation& segment_objects(const Camera& reference, const std::vector<ObjectClick>& objects,
+                                           const SegmentOptions& options = {}, const ProgressCallback& progress = {},
+                                           const ObjectFrameMaskFn& custom = {}) {
+    if (objects.empty()) throw Error("no object: give at least one click or box", "prompt");
+    const Setup setup = prepare(reference, objects, options, !custom);
+    result_.reset();
+    std::vector<ObjectPrompt> prompts;
+    for (std::size_t o = 0; o < objects.size(); ++o)
+      prompts.push_back({objects[o].name.empty() ? "object_" + std::to_string(o) : objects[o].name, setup.prompts[o], -1});
+    if (custom) {
+      std::vector<HostSegmenter> hosts;
+      for (std::size_t o = 0; o < objects.size(); ++o)
+        hosts.push_back(host_segmenter(setup, o, options, [&custom, o](std::size_t k, const Camera& c, const ImageRGB8& im,
+                                                                      const Prompt& p, bool subset, const FrameBox& b) {
+          return custom(o, k, c, im, p, subset, b);
+        }));
+      EachObject<HostSegmenter> each{std::span<HostSegmenter>(hosts)};
+      objects_ = vcar::segment_objects(scene_, views_, prompts, *setup.renderer, each, VcarParams::robust(), progress);
+    } else {
+      std::vector<RegionGrowSegmenter<cpu::TiledRenderer>> grow(objects.size(), {*setup.renderer, options.grow});
+      EachObject<RegionGrowSegmenter<cpu::TiledRenderer>> each{std::span(grow)};
+      objects_ = vcar::segment_objects(scene_, views_, prompts, *setup.renderer, each, VcarParams::robust(), progress);
+    }
+    return *objects_;
   }
 
   // The scene seen from `cam` (vcar's CPU renderer, the images the segmenter sees).
@@ -195,6 +214,11 @@ public:
     return *result_;
   }
   const std::vector<Camera>& views() const { return views_; }
+  // The latest segment_objects call's objects (aligned with its prompts).
+  const MultiSegmentation& objects() const {
+    if (!objects_) throw Error("no several-object segmentation yet: call segment_objects first", "objects");
+    return *objects_;
+  }
 
   // The selected Gaussians with their refined log-scales (ABR), as Inria PLY bytes.
   std::vector<std::uint8_t> object_ply() { return write_and_read([&](const auto& p) { io::write_ply(p, scene_, result().indices, &result().log_scale); }); }
@@ -213,6 +237,66 @@ public:
   }
 
 private:
+  // What segment and segment_objects share: the views, each object's prompt on view 0 (the
+  // reference at the render size) and the renderer that keeps depth for the prompt's lift.
+  struct Setup {
+    Camera ref;
+    float s = 1.f;
+    std::vector<Prompt> prompts;
+    std::unique_ptr<cpu::TiledRenderer> base = std::make_unique<cpu::TiledRenderer>();
+    std::unique_ptr<DepthKeepingRenderer<cpu::TiledRenderer>> renderer =
+        std::make_unique<DepthKeepingRenderer<cpu::TiledRenderer>>(*base);
+  };
+  Setup prepare(const Camera& reference, const std::vector<ObjectClick>& objects, const SegmentOptions& options,
+                bool region_grow) {
+    require_scene();
+    reference.validate();
+    Setup st;
+    st.s = std::min(1.f, static_cast<float>(options.max_side) / static_cast<float>(std::max(reference.width, reference.height)));
+    st.ref = scaled(reference, st.s);
+    for (const ObjectClick& o : objects) {
+      Prompt prompt;
+      if (std::isfinite(o.u) && std::isfinite(o.v)) {
+        prompt.points = {Eigen::Vector2f(o.u * st.s, o.v * st.s)};
+        prompt.point_labels = {1};
+      }
+      if (o.box) {
+        const Eigen::Vector4f& b = *o.box;
+        if (!b.allFinite() || !(b[2] > b[0] && b[3] > b[1])) throw Error("the box is empty or not finite (needs x0 < x1, y0 < y1)", "prompt");
+        prompt.box = b * st.s;
+      }
+      if (prompt.points.empty() && !prompt.box) throw Error("no prompt: give a click or a box", "prompt");
+      if (prompt.points.empty() && region_grow) throw Error("the region-growing segmenter needs a click (a box needs another segmenter)", "prompt");
+      prompt.reference_view = 0;
+      st.prompts.push_back(std::move(prompt));
+    }
+    // Where the views circle (without cameras): the first object's click, else its box's centre.
+    const Prompt& first = st.prompts.front();
+    const Eigen::Vector2f anchor = !first.points.empty() ? first.points[0] : Eigen::Vector2f(0.5f * ((*first.box)[0] + (*first.box)[2]), 0.5f * ((*first.box)[1] + (*first.box)[3]));
+    std::vector<Camera> views;
+    if (!cameras_.empty()) {
+      views.push_back(st.ref);
+      for (const Camera& c : cameras_)
+        if (!(c.name == reference.name && c.R_w.isApprox(reference.R_w) && c.t_w.isApprox(reference.t_w)))
+          views.push_back(scaled(c, std::min(1.f, static_cast<float>(options.max_side) / static_cast<float>(std::max(c.width, c.height)))));
+    } else {
+      views = orbit_around_click(st.ref, anchor, *st.renderer, options.orbit_views);
+    }
+    views_ = views;
+    return st;
+  }
+
+  // The host's segmenter for object `o`: its prompt lifted to 3D on the reference view.
+  HostSegmenter host_segmenter(const Setup& st, std::size_t o, const SegmentOptions& options, FrameMaskFn custom) const {
+    HostSegmenter h{std::nullopt, st.prompts[o].box ? options.box_margin : options.point_margin, std::move(custom)};
+    try {
+      h.lifted = lift_prompt(scene_, st.ref, st.prompts[o], *st.base);
+    } catch (const Error& e) {
+      std::fprintf(stderr, "vcar: warning: the prompt could not be lifted to 3D (%s): frames get no box\n", e.what());
+    }
+    return h;
+  }
+
   static Camera scaled(const Camera& c, float s) {
     if (s >= 1.f) return c;
     Camera o = c;
@@ -276,6 +360,7 @@ private:
   io::SceneFormat format_ = io::SceneFormat::ply;
   std::vector<Camera> cameras_, views_;
   std::optional<SegmentationResult> result_;
+  std::optional<MultiSegmentation> objects_;
 };
 
 }  // namespace vcar::web

@@ -4,7 +4,7 @@
 //
 //   node test/browser_test.mjs --native BUILD/vcar_web_native --scene tests/data/donut.ply \
 //        --click 200,240 [--cameras cams.json --view NAME] [--segmenter grabcut|region]
-//        [--screenshots docs/figures] [--min-iou 0.98]
+//        [--screenshots docs/figures] [--min-iou 0.98] [--objects U,V;U,V]
 // --segmenter (default region): the page's segmenter (URL segmenter=, and the select for the
 // canvas click) and the native twin's (grabcut: OpenCV's WebAssembly build in the page,
 // Debian's OpenCV natively).
@@ -15,6 +15,10 @@
 // vcar camera) selects an overlapping set (Jaccard >= --min-click-iou, 0.7: the reference view
 // then differs, see there); the PLY bytes the page offers have the right vertex counts (object =
 // selected, removed = n - selected, state PLY = n with exactly `selected` bytes with bit 0 set).
+// With --objects (a click per object on the same view): the page's objects= flow
+// (vcar::segment_objects) against the native twin's --objects: as many objects, the first one
+// not empty, no Gaussian in two objects, each object's Jaccard with the native one >= --min-iou
+// (two empty selections agree: an object can lose all its Gaussians to an earlier one).
 // Prints one JSON line with the numbers (browser and native seconds of the same run).
 import http from 'node:http';
 import fs from 'node:fs';
@@ -154,6 +158,33 @@ try {
   if (obj.n !== clicked.length) fail(`object.ply has ${obj.n} vertices, ${clicked.length} selected`);
   if (rem.n !== total - clicked.length || st.n !== total) fail(`removed.ply ${rem.n} / state PLY ${st.n} vertices for ${total}`);
   if (st.state !== clicked.length) fail(`state PLY marks ${st.state} selected, ${clicked.length} expected`);
+  if (args.objects) {  // several objects: the page's objects= against the native twin's --objects
+    await page.goto(`${base}/index.html?${q}${qSide}&objects=${encodeURIComponent(args.objects)}`);
+    await page.waitForFunction(() => document.getElementById('vcar-result').textContent.length > 0, { timeout: timeoutMs, polling: 500 });
+    const multi = JSON.parse(await page.$eval('#vcar-result', (e) => e.textContent));
+    if (multi.error) throw new Error('page (objects): ' + multi.error + '\n' + logs.join('\n'));
+    const natMulti = JSON.parse(execFileSync(native, ['--scene', scene, '--objects', args.objects, '--segmenter', segmenter,
+      ...(maxSide ? ['--max-side', String(maxSide)] : []),
+      ...(args.cameras ? ['--cameras', path.resolve(args.cameras)] : []), ...(args.view ? ['--view', args.view] : [])],
+      { encoding: 'utf8', stdio: ['ignore', 'pipe', 'inherit'] }));
+    const wanted = args.objects.split(';').length;
+    const seen = new Set();
+    let shared = 0;
+    const jaccards = multi.objects.map((o, k) => {
+      for (const i of o.indices) { shared += seen.has(i); seen.add(i); }
+      const n = new Set(natMulti.objects[k] ? natMulti.objects[k].indices : []);
+      let both = 0;
+      for (const i of o.indices) both += n.has(i);
+      const union = o.indices.length + n.size - both;
+      return union ? both / union : 1;  // both empty: the same (an object may lose all to another)
+    });
+    out.objects = { selected: multi.objects.map((o) => o.selected), jaccard: jaccards.map((x) => Number(x.toFixed(5))),
+                    browser_seconds: Number(multi.seconds.toFixed(3)), native_seconds: Number(natMulti.seconds.toFixed(3)) };
+    if (multi.objects.length !== wanted || natMulti.objects.length !== wanted) fail(`objects: ${multi.objects.length} in the page, ${natMulti.objects.length} native, ${wanted} asked`);
+    if (!(multi.objects[0].selected > 0)) fail('objects: the first object selected nothing');
+    if (shared) fail(`objects: ${shared} Gaussians in two objects`);
+    if (!jaccards.every((x) => x >= minIou)) fail(`objects: Jaccard with the native selections ${jaccards.join(', ')} < ${minIou}`);
+  }
 } catch (e) {
   fail(e.message);
 } finally {

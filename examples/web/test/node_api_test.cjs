@@ -1,7 +1,7 @@
 // The JavaScript API of vcar.js under Node (the page's worker uses the same calls), on a real
 // trained scene (tests/data/train-1000.ply): loading, errors as messages, the JavaScript
 // segmenter hook (called per frame, reference first, masks checked for size), indices, scores,
-// log-scales and the PLY bytes. Exits non-zero on the first failed check.
+// log-scales, the PLY bytes and several objects at once (segmentObjects). Exits non-zero on the first failed check.
 //   node test/node_api_test.cjs dist/vcar.js ../../tests/data/train-1000.ply [SCENE.splat SCENE.spz
 //        [V4.spz V4-AS-V3.spz]]
 // The optional files (the same scene converted by `vcar_web_native --convert`) check the other
@@ -85,6 +85,19 @@ const vertexCount = (b) => Number(/element vertex (\d+)/.exec(Buffer.from(b.suba
   check(vertexCount(s.removedPly()) === 1000 - idx.length, 'removed PLY holds the rest');
   const st = s.statePly();
   check(vertexCount(st) === 1000 && /property uchar state/.test(Buffer.from(st.subarray(0, 4000)).toString('latin1')), 'state PLY: every Gaussian + a state byte');
+
+  // Several objects (vcar::segment_objects): one prompt gives segment's selection; two prompts
+  // ask the hook per object (frame.object) and come back disjoint (conflicts resolved by score).
+  const one = s.segmentObjects(cam, [{ click: [u, v] }], { segmenter: covered, orbitViews: 4 }, null);
+  const o0 = s.objectIndices(0);
+  check(one.length === 1 && o0.length === idx.length && o0.every((x, i) => x === idx[i]), 'one prompt: segmentObjects selects what segment does');
+  const asked = new Set();
+  const two = s.segmentObjects(cam, [{ click: [u, v], name: 'clicked' }, { box: [0, 0, 80, 120], click: null }],
+                               { segmenter: (f) => { asked.add(f.object); return covered(f); }, orbitViews: 4 }, null);
+  const a = s.objectIndices(0), inA = new Set(a);
+  check(two.length === 2 && asked.has(0) && asked.has(1), 'two prompts: the hook is asked for each object');
+  check(s.objectIndices(1).every((x) => !inA.has(x)), 'two prompts: no Gaussian in both objects');
+  check(/no object 2/.test(msg(() => s.objectIndices(2)) || ''), 'objectIndices past the objects names the problem');
 
   // A wrong-size mask is an error naming the hook.
   const bad = msg(() => s.segment(cam, u, v, { segmenter: () => new Uint8Array(7), orbitViews: 2 }, null));

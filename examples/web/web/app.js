@@ -1,8 +1,10 @@
 // vcar's web page: a Spark (three.js) splat viewer, vcar in a Web Worker, click (or shift-drag a
-// box) to select. Unattended contract (docs/web.md):
+// box) to select; alt-click marks several objects and "segment objects" runs them together.
+// Unattended contract (docs/web.md):
 // index.html?scene=URL&cameras=URL&view=NAME&click=u,v&box=x0,y0,x1,y1&segmenter=grabcut|region
 // (click, box or both) runs the whole flow and writes {"selected": n, "seconds": t, "indices":
-// [...]} into #vcar-result.
+// [...]} into #vcar-result; objects=u,v;u,v;... (a click per object) runs vcar::segment_objects
+// and writes {"objects": [{"selected": n, "indices": [...]}, ...], "seconds": t}.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { SparkRenderer, SplatMesh } from '@sparkjsdev/spark';
@@ -187,6 +189,21 @@ async function segment(cam, u, v, options = {}) {
   return r;
 }
 
+// Several objects at once (vcar::segment_objects): prompts = [{click: [u, v]} | {box: [...]}]
+// on cam. The viewer highlights them all; the downloads stay with single selections.
+async function segmentObjects(cam, prompts, options = {}) {
+  options = { segmenterName: $('segmenter-select').value, ...options };
+  $('progress').value = 0;
+  const r = await call({ type: 'segment-objects', camera: cam, prompts, options });
+  selection = r.objects.flatMap((o) => Array.from(o.indices));
+  display('highlight');
+  enableResultButtons(false);
+  for (const id of ['btn-delete', 'btn-isolate', 'btn-show']) $(id).disabled = false;
+  status(`${r.objects.length} objects: ${r.objects.map((o) => o.indices.length.toLocaleString()).join(' + ')} Gaussians in ${r.seconds.toFixed(2)} s`);
+  $('details').textContent = JSON.stringify({ simd: simdPath, objects: r.objects.map((o) => o.diagnostics) }, null, 1);
+  return r;
+}
+
 function enableResultButtons(on) {
   for (const id of ['btn-delete', 'btn-isolate', 'btn-show', 'dl-object', 'dl-removed', 'dl-state']) $(id).disabled = !on;
 }
@@ -225,7 +242,15 @@ $('view-select').onchange = async () => {
 };
 
 // Click (not drag) on the canvas, or shift-drag a box: segment from the viewer's current camera.
-let down = null, boxing = false;
+// Alt-click marks an object (from the same camera: do not move the viewer in between).
+let down = null, boxing = false, marked = [];
+$('btn-objects').onclick = async () => {
+  const prompts = marked;
+  marked = [];
+  $('btn-objects').disabled = true;
+  $('btn-objects').textContent = 'segment objects';
+  try { await segmentObjects(viewerCameraToVcar(), prompts); } catch (err) { status('error: ' + err.message); }
+};
 canvas.addEventListener('pointerdown', (e) => {
   down = [e.offsetX, e.offsetY];
   boxing = e.shiftKey && !!camera;
@@ -249,6 +274,10 @@ canvas.addEventListener('pointerup', async (e) => {
     if (wasBoxing && Math.abs(e.offsetX - x) > 4 && Math.abs(e.offsetY - y) > 4) {
       const box = [Math.min(x, e.offsetX), Math.min(y, e.offsetY), Math.max(x, e.offsetX), Math.max(y, e.offsetY)];
       await segment(viewerCameraToVcar(), NaN, NaN, { box });
+    } else if (!wasBoxing && Math.hypot(e.offsetX - x, e.offsetY - y) <= 4 && e.altKey) {
+      marked.push({ click: [e.offsetX, e.offsetY] });  // one more object for "segment objects"
+      $('btn-objects').disabled = false;
+      $('btn-objects').textContent = `segment ${marked.length} object${marked.length > 1 ? 's' : ''}`;
     } else if (!wasBoxing && Math.hypot(e.offsetX - x, e.offsetY - y) <= 4) {
       await segment(viewerCameraToVcar(), e.offsetX, e.offsetY);
     }
@@ -256,7 +285,7 @@ canvas.addEventListener('pointerup', async (e) => {
 });
 
 // For tests and scripting: the worker protocol (docs/web.md) and the current selection.
-window.vcarPage = { call, display, selection: () => selection };
+window.vcarPage = { call, display, segmentObjects, selection: () => selection };
 
 let simdPath = '';
 async function unattended() {
@@ -275,7 +304,19 @@ async function unattended() {
   const cam = await referenceView(params.get('view') || '');
   $('view-select').value = params.get('view') || '';
   setViewerCamera(cam);
-  const click = params.get('click'), box = params.get('box');
+  const click = params.get('click'), box = params.get('box'), objects = params.get('objects');
+  if (objects) {
+    const prompts = objects.split(';').map((c) => ({ click: c.split(',').map(Number) }));
+    const opts = {};
+    if (params.get('segmenter')) opts.segmenterName = params.get('segmenter');
+    if (params.get('maxSide')) opts.maxSide = Number(params.get('maxSide'));
+    const r = await segmentObjects(cam, prompts, opts);
+    $('vcar-result').textContent = JSON.stringify({
+      objects: r.objects.map((o) => ({ selected: o.indices.length, indices: Array.from(o.indices) })),
+      seconds: r.seconds, simd: simdPath, page_seconds: (performance.now() - t0) / 1000,
+    });
+    return;
+  }
   if (!click && !box) return;
   const [u, v] = click ? click.split(',').map(Number) : [NaN, NaN];
   const opts = {};

@@ -4,11 +4,13 @@
 // Messages in:  {type: 'scene', bytes, name} | {type: 'cameras', bytes, name} | {type: 'view', name}
 //               {type: 'default-view', width, height}
 //               {type: 'segment', camera, u, v, options} | {type: 'ply', kind: 'object'|'removed'|'state'}
+//               {type: 'segment-objects', camera, prompts: [{click: [u, v] | null, box: [...] | null}], options}
 //               (options: {segmenterName: 'grabcut' | 'region', box: [x0, y0, x1, y1], maxSide, ...};
 //               u, v NaN: no click, the box alone)
 // Messages out: {type: 'ready', simd} | {type: 'progress', stage, view, views, elapsed}
 //               {type: 'scene', n, format} | {type: 'cameras', names} | {type: 'view', camera}
 //               {type: 'result', indices, scores, logScales, diagnostics, seconds}
+//               {type: 'objects', objects: [{indices, diagnostics}], seconds}  (one per prompt)
 //               {type: 'ply', kind, bytes} | {type: 'error', message, request}
 importScripts('vcar.js', 'vendor/fzstd/fzstd.js');  // fzstd: SPZ v4's zstd streams (self.fzstd)
 
@@ -85,7 +87,7 @@ onmessage = async (ev) => {
       postMessage({ type: 'view', camera: session.referenceView(q.name || '') });
     } else if (q.type === 'default-view') {
       postMessage({ type: 'view', camera: session.defaultView(q.width, q.height) });
-    } else if (q.type === 'segment') {
+    } else if (q.type === 'segment' || q.type === 'segment-objects') {
       const t0 = performance.now();
       const options = { ...(q.options || {}) };
       const name = options.segmenterName || 'grabcut';
@@ -99,10 +101,18 @@ onmessage = async (ev) => {
         throw new Error(`unknown segmenter '${name}' (grabcut or region)`);
       }
       if (seg) options.segmenter = seg;
-      const diagnostics = session.segment(q.camera, q.u, q.v, options, (p) => {
+      const progress = (p) => {
         postMessage({ type: 'progress', ...p });
         return true;
-      });
+      };
+      if (q.type === 'segment-objects') {  // vcar::segment_objects: one coarse round for all
+        const diagnostics = session.segmentObjects(q.camera, q.prompts, options, progress);
+        const objects = diagnostics.map((d, k) => ({ indices: session.objectIndices(k), diagnostics: d }));
+        const seconds = (performance.now() - t0) / 1000;
+        postMessage({ type: 'objects', objects, seconds }, objects.map((o) => o.indices.buffer));
+        return;
+      }
+      const diagnostics = session.segment(q.camera, q.u, q.v, options, progress);
       const seconds = (performance.now() - t0) / 1000;
       const indices = session.indices(), scores = session.scores(), logScales = session.logScales();
       postMessage({ type: 'result', indices, scores, logScales, diagnostics, seconds },

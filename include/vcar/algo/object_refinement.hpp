@@ -174,9 +174,9 @@ public:
     timing("fine_voting", voting_s);
     diag_.overshoot_eroded += fine_->overshoot_eroded();
     fine_->weigh_views(params_.tau_fine);  // Eq. R13
-    diag_.tau_fine_applied = fine_->selected(params_.tau_fine, params_.tau_strict, params_.split_fraction, selected_, scores_);
-    split_ = diag_.tau_fine_applied < params_.tau_strict;  // R7 found the vote split
-    diag_.undershoot_applied = fine_->undershoot_applied();
+    verdict_ = fine_->selected(params_.tau_fine, params_.tau_strict, params_.split_fraction, selected_, scores_);
+    diag_.tau_fine_applied = verdict_.tau;
+    diag_.undershoot_applied = verdict_.undershoot;
     diag_.n_fine = diag_.n_final = selected_.size();
     fine_.reset();
     if (selected_.empty()) {
@@ -191,7 +191,7 @@ public:
     // coarse round's occlusion test over the whole scene (coarse_seen: V^o per scene Gaussian).
     // Not after a split fine vote (Eq. R7): masks that undershoot label the object's own seen
     // rim background, and R10 would carry that label into the hidden part of its planes.
-    if (params_.coplanar_radius > 0.f && !coarse_seen.empty() && !split_) {
+    if (params_.coplanar_radius > 0.f && !coarse_seen.empty() && !verdict_.split) {
       const auto tc = Clock::now();
       const CoplanarParams cp{params_.coplanar_radius, params_.coplanar_angle_deg, params_.coplanar_slab};
       const std::vector<std::size_t> drop =
@@ -218,7 +218,7 @@ public:
     // Eq. R8 after a split fine vote: each training mask widened by its undershoot, and the
     // Gaussians' own footprints (no low-pass: it would widen every ellipse past masks that are
     // already too small).
-    const bool r8 = params_.abr_undershoot && params_.enable_abr && split_;
+    const bool r8 = params_.abr_undershoot && params_.enable_abr && verdict_.split;
     VcarParams abr_params = params_;
     if (r8) abr_params.abr_lowpass = false;
     if (r8)
@@ -253,7 +253,7 @@ private:
   Diagnostics& diag_;
   std::vector<std::size_t> order_;  // frame k of a round -> training view
   std::vector<double> undershoot_;  // Eq. R6a of each training view's fine-round mask (px)
-  bool split_ = false;              // Eq. R7 kept the majority threshold
+  FineVerdict verdict_;             // the fine vote's (Eq. R7, R6c); none without a fine round
   std::vector<Index> coarse_set_;   // G_coarse, the fine round's renders
   std::vector<Camera> fine_frames_;
   std::vector<std::size_t> fine_train_;  // fine frame -> training frame k (npos: sampled)

@@ -23,6 +23,15 @@
 
 namespace vcar::detail {
 
+// What the fine vote decided (Eq. R7, R6c): the threshold applied (tau_fine or tau_strict),
+// whether R7 found the vote split (tau_strict > tau_fine and it kept tau_fine), and whether
+// Eq. R6 shaped it (on, and its gate R6c did not find the vote without it decisive).
+struct FineVerdict {
+  float tau = 0.f;
+  bool split = false;
+  bool undershoot = false;
+};
+
 // The vote of one round: the paper's VisibilityVoting (Eq. 1-3, and the occlusion_aware
 // option), or RobustVoting when a mechanism beyond the paper is on (docs/robust.md).
 class RoundVote {
@@ -81,20 +90,16 @@ public:
     if (robust_) return robust_->selected(tau, indices, scores, undershoot);
     paper_->selected(tau, indices, scores);
   }
-  // The same with Eq. R7 choosing between tau and tau_strict (> tau; else tau); returns the
-  // threshold applied. With R6's gate, R7 reads the vote without R6 first: when that vote is
-  // decisive it is the result; when it splits, the vote with R6 decides as above (Eq. R6c).
-  float selected(float tau, float tau_strict, float split, std::vector<Index>& indices, std::vector<float>& scores) const {
-    undershoot_applied_ = undershoot_;
-    if (gated_ && tau_strict > tau && decided(tau, tau_strict, split, indices, scores, false) == tau_strict) {
-      undershoot_applied_ = false;                                                           // Eq. R6c
-      return tau_strict;
-    }
-    return decided(tau, tau_strict, split, indices, scores, true);
+  // The same with Eq. R7 choosing between tau and tau_strict (> tau; else tau): the verdict.
+  // With R6's gate, R7 reads the vote without R6 first: when that vote is decisive it is the
+  // result; when it splits, the vote with R6 decides as above (Eq. R6c).
+  FineVerdict selected(float tau, float tau_strict, float split, std::vector<Index>& indices,
+                       std::vector<float>& scores) const {
+    if (gated_ && tau_strict > tau && decided(tau, tau_strict, split, indices, scores, false) == tau_strict)
+      return {tau_strict, false, false};                                                     // Eq. R6c
+    const float applied = decided(tau, tau_strict, split, indices, scores, true);
+    return {applied, tau_strict > tau && applied == tau, undershoot_};
   }
-  // Whether Eq. R6 shaped the latest selected(tau, tau_strict, ...) (false when its gate found
-  // the vote without it decisive).
-  bool undershoot_applied() const { return undershoot_applied_; }
 
 private:
   float decided(float tau, float tau_strict, float split, std::vector<Index>& indices, std::vector<float>& scores,
@@ -112,7 +117,6 @@ private:
 
   bool occlusion_, overshoot_, grow_, undershoot_, gated_;
   std::size_t overshoot_eroded_ = 0, grown_ = 0;
-  mutable bool undershoot_applied_ = false;
   std::optional<VisibilityVoting> paper_;
   std::optional<RobustVoting> robust_;
 };

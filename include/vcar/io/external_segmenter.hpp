@@ -133,6 +133,71 @@ struct ExternalSegmenterOptions {
   std::function<std::optional<Eigen::Vector4f>(std::size_t frame, const Camera&)> boxes;
 };
 
+namespace detail {
+
+// The camera entry of cameras.json (Inria layout: camera-to-world rotation rows, centre).
+inline nlohmann::json request_camera_json(const Camera& c, std::size_t id, const std::string& img_name) {
+  const Eigen::Matrix3f R_c2w = c.R_w.transpose();
+  const Eigen::Vector3f pos = c.position();
+  nlohmann::json rot = nlohmann::json::array();
+  for (int r = 0; r < 3; ++r) rot.push_back({R_c2w(r, 0), R_c2w(r, 1), R_c2w(r, 2)});
+  return {{"id", id}, {"img_name", img_name}, {"width", c.width}, {"height", c.height},
+          {"position", {pos.x(), pos.y(), pos.z()}}, {"rotation", rot},
+          {"fx", c.fx}, {"fy", c.fy}, {"cx", c.cx}, {"cy", c.cy}, {"view", c.name}};
+}
+
+// prompt.json's prompt fields.
+inline nlohmann::json request_prompt_json(const Prompt& prompt) {
+  nlohmann::json pts = nlohmann::json::array();
+  for (const auto& p : prompt.points) pts.push_back({p.x(), p.y()});
+  nlohmann::json p = {{"points", pts}, {"point_labels", prompt.point_labels}, {"box", nullptr}, {"text", prompt.text}};
+  if (prompt.box) p["box"] = {(*prompt.box)[0], (*prompt.box)[1], (*prompt.box)[2], (*prompt.box)[3]};
+  return p;
+}
+
+// The last lines of the program's log, for error messages.
+inline std::string program_log_tail(const std::filesystem::path& log, std::size_t max_chars = 1500) {
+  std::ifstream in(log, std::ios::binary);
+  if (!in) return {};
+  std::stringstream ss;
+  ss << in.rdbuf();
+  std::string s = ss.str();
+  if (s.size() > max_chars) s = "..." + s.substr(s.size() - max_chars);
+  while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
+  return s.empty() ? std::string{} : "\n--- segmenter output (tail) ---\n" + s;
+}
+
+// Masks the program has finished so far: masks/NNNNN.png (a file being written under another
+// name, e.g. NNNNN.png.part.png, does not count).
+inline std::size_t masks_written(const std::filesystem::path& dir, int depth = 0) {
+  std::size_t n = 0;
+  std::error_code ec;
+  const std::filesystem::path d = depth == 0 ? dir / "masks" : dir;
+  for (const auto& e : std::filesystem::directory_iterator(d, ec)) {
+    if (depth == 0 && e.is_directory(ec)) {
+      n += masks_written(e.path(), 1);  // masks/<object>/ of a multi-object request
+      continue;
+    }
+    const std::string f = e.path().filename().string();
+    n += f.size() == 9 && f.compare(5, 4, ".png") == 0 && f.find_first_not_of("0123456789") == 5;
+  }
+  return n;
+}
+
+// Ends the program's process group: SIGTERM, up to 2 s, then SIGKILL.
+inline void kill_process_group(pid_t pid) {
+  ::kill(-pid, SIGTERM);
+  int status = 0;
+  for (int i = 0; i < 100; ++i) {  // up to 2 s to exit cleanly, then SIGKILL
+    if (::waitpid(pid, &status, WNOHANG) == pid) return;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ::kill(-pid, SIGKILL);
+  ::waitpid(pid, &status, 0);
+}
+
+}  // namespace detail
+
 class ExternalSegmenter {
 public:
   enum class Failure { none, start, exit_status, timeout, bad_mask, cancelled };
@@ -251,16 +316,6 @@ public:
     return buf;
   }
 
-  // The camera entry of cameras.json (Inria layout: camera-to-world rotation rows, centre).
-  static nlohmann::json camera_json(const Camera& c, std::size_t id, const std::string& img_name) {
-    const Eigen::Matrix3f R_c2w = c.R_w.transpose();
-    const Eigen::Vector3f pos = c.position();
-    nlohmann::json rot = nlohmann::json::array();
-    for (int r = 0; r < 3; ++r) rot.push_back({R_c2w(r, 0), R_c2w(r, 1), R_c2w(r, 2)});
-    return {{"id", id}, {"img_name", img_name}, {"width", c.width}, {"height", c.height},
-            {"position", {pos.x(), pos.y(), pos.z()}}, {"rotation", rot},
-            {"fx", c.fx}, {"fy", c.fy}, {"cx", c.cx}, {"cy", c.cy}, {"view", c.name}};
-  }
 
 private:
   std::filesystem::path make_request_dir(const std::string& where) {
@@ -278,13 +333,6 @@ private:
     return templ;
   }
 
-  static nlohmann::json prompt_json(const Prompt& prompt) {
-    nlohmann::json pts = nlohmann::json::array();
-    for (const auto& p : prompt.points) pts.push_back({p.x(), p.y()});
-    nlohmann::json p = {{"points", pts}, {"point_labels", prompt.point_labels}, {"box", nullptr}, {"text", prompt.text}};
-    if (prompt.box) p["box"] = {(*prompt.box)[0], (*prompt.box)[1], (*prompt.box)[2], (*prompt.box)[3]};
-    return p;
-  }
 
   void write_request(const std::filesystem::path& dir, const FrameSequence& frames,
                      const Prompt& prompt, const std::string& where,
@@ -308,9 +356,9 @@ private:
         failure_ = Failure::start;
         throw Error(std::string("cannot write a frame: ") + e.what(), where);
       }
-      cams.push_back(camera_json(frames.cameras[k], k, stem));
+      cams.push_back(detail::request_camera_json(frames.cameras[k], k, stem));
     }
-    nlohmann::json p = prompt_json(prompt);
+    nlohmann::json p = detail::request_prompt_json(prompt);
     p["round"] = round_;
     p["frames"] = frames.size();
     if (options_.boxes && !objects) {
@@ -324,7 +372,7 @@ private:
     if (objects) {
       nlohmann::json list = nlohmann::json::array();
       for (const Object& o : *objects) {
-        nlohmann::json e = prompt_json(o.prompt);
+        nlohmann::json e = detail::request_prompt_json(o.prompt);
         e["name"] = o.name;
         e["frame"] = o.prompt.reference_view;
         e["frames"] = {o.first_frame, o.frames};
@@ -345,34 +393,7 @@ private:
     }
   }
 
-  // The last lines of the program's log, for error messages.
-  static std::string log_tail(const std::filesystem::path& log, std::size_t max_chars = 1500) {
-    std::ifstream in(log, std::ios::binary);
-    if (!in) return {};
-    std::stringstream ss;
-    ss << in.rdbuf();
-    std::string s = ss.str();
-    if (s.size() > max_chars) s = "..." + s.substr(s.size() - max_chars);
-    while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
-    return s.empty() ? std::string{} : "\n--- segmenter output (tail) ---\n" + s;
-  }
 
-  // Masks the program has finished so far: masks/NNNNN.png (a file being written under another
-  // name, e.g. NNNNN.png.part.png, does not count).
-  static std::size_t masks_written(const std::filesystem::path& dir, int depth = 0) {
-    std::size_t n = 0;
-    std::error_code ec;
-    const std::filesystem::path d = depth == 0 ? dir / "masks" : dir;
-    for (const auto& e : std::filesystem::directory_iterator(d, ec)) {
-      if (depth == 0 && e.is_directory(ec)) {
-        n += masks_written(e.path(), 1);  // masks/<object>/ of a multi-object request
-        continue;
-      }
-      const std::string f = e.path().filename().string();
-      n += f.size() == 9 && f.compare(5, 4, ".png") == 0 && f.find_first_not_of("0123456789") == 5;
-    }
-    return n;
-  }
 
   void run_program(const std::filesystem::path& dir, const std::string& where, std::size_t frames) {
     std::vector<std::string> args = argv_;
@@ -422,7 +443,7 @@ private:
       if (options_.progress) {
         const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         if (t >= next_tick) {
-          options_.progress({ExternalProgress::Phase::running, round_, masks_written(dir), frames, t});
+          options_.progress({ExternalProgress::Phase::running, round_, detail::masks_written(dir), frames, t});
           next_tick = t + 0.25;
         }
       }
@@ -433,13 +454,13 @@ private:
       const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       const bool cancel = options_.cancelled && options_.cancelled();
       if (cancel || elapsed > options_.timeout_s) {
-        kill_group(pid);
+        detail::kill_process_group(pid);
         failure_ = cancel ? Failure::cancelled : Failure::timeout;
         if (cancel) throw Error("interrupted while the segmenter was running", cmd_where);
         char secs[32];
         std::snprintf(secs, sizeof secs, "%g", options_.timeout_s);
         throw Error(std::string("timed out after ") + secs +
-                        " s (--segmenter-timeout); request kept in " + dir.string() + log_tail(log),
+                        " s (--segmenter-timeout); request kept in " + dir.string() + detail::program_log_tail(log),
                     cmd_where);
       }
       std::this_thread::sleep_for(sleep);
@@ -450,20 +471,10 @@ private:
     const std::string how = WIFEXITED(status)
                                 ? "exited with status " + std::to_string(WEXITSTATUS(status))
                                 : "was killed by signal " + std::to_string(WTERMSIG(status));
-    throw Error("the segmenter program " + how + "; request kept in " + dir.string() + log_tail(log),
+    throw Error("the segmenter program " + how + "; request kept in " + dir.string() + detail::program_log_tail(log),
                 cmd_where);
   }
 
-  static void kill_group(pid_t pid) {
-    ::kill(-pid, SIGTERM);
-    int status = 0;
-    for (int i = 0; i < 100; ++i) {  // up to 2 s to exit cleanly, then SIGKILL
-      if (::waitpid(pid, &status, WNOHANG) == pid) return;
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    ::kill(-pid, SIGKILL);
-    ::waitpid(pid, &status, 0);
-  }
 
   Mask read_mask_png(const std::filesystem::path& file, const std::string& where) {
     try {
