@@ -44,8 +44,10 @@
 //    prompt's box lifted into it, as `vcar segment --segmenter-cmd`.
 // Methods: vcar:paper (the paper's preset for the rig: nvos forward-facing, lerf 360), vcar:robust
 // (the library's default, VcarParams::robust()), vcar:code (VcarParams::reference_code(): the
-// released code's constants and rules, conventions §7), and the peers (evidence/methods.hpp), which take
-// the coarse round's training masks.
+// released code's constants and rules, conventions §7), vcar:lean (issue 47's candidate default:
+// the paper's preset plus the occlusion test and view reliability, docs/notes/
+// field-probes-2026-12-02.md), and the peers (evidence/methods.hpp), which take the coarse
+// round's training masks.
 //
 // Cost: the coarse round's training masks (frames rendering the whole scene) are the same for
 // every method of a (seed, target, rig, segmenter): they are computed once, and VCAR's coarse
@@ -147,7 +149,7 @@ const std::vector<std::string> kNamedOnly = {"isnet"};
 const std::vector<std::string> kRigs = {"forward", "orbit"};
 
 std::vector<std::string> all_methods() {
-  std::vector<std::string> m = {"vcar:paper", "vcar:robust", "vcar:code"};
+  std::vector<std::string> m = {"vcar:paper", "vcar:robust", "vcar:code", "vcar:lean"};
   for (const auto& p : evidence::kPeers) m.push_back(p);
   return m;
 }
@@ -392,7 +394,7 @@ std::vector<Cell> plan_cells(const Options& o) {
     const std::vector<std::string> known = all_methods();
     for (const auto& m : c.methods)
       if (std::find(known.begin(), known.end(), m) == known.end())
-        throw Error("unknown method '" + m + "' (vcar:paper, vcar:robust, vcar:code, naive, sagd, flashsplat, gaussiancut, ludvig, lbg)", "--methods");
+        throw Error("unknown method '" + m + "' (vcar:paper, vcar:robust, vcar:code, vcar:lean, naive, sagd, flashsplat, gaussiancut, ludvig, lbg)", "--methods");
   }
   return cells;
 }
@@ -673,8 +675,16 @@ private:
         } else if (r.variant == "code") {
           p = VcarParams::reference_code();
           r.preset = "reference_code";
+        } else if (r.variant == "lean") {
+          // Issue 47's candidate (docs/notes/field-probes-2026-12-02.md): the paper's preset for
+          // the rig plus the occlusion test in both rounds (R3) and view reliability (R13), no
+          // shrinkage between evidence levels (kappa 0). Not a library preset yet.
+          p = evidence::is_360(k.rig_name) ? VcarParams::lerf() : VcarParams::nvos();
+          p.coarse_occlusion = p.fine_occlusion = p.view_reliability = true;
+          p.kappa = 0.f;
+          r.preset = evidence::is_360(k.rig_name) ? "lerf+R3+R13" : "nvos+R3+R13";
         } else {
-          throw Error("unknown VCAR variant '" + r.variant + "' (vcar:paper, vcar:robust or vcar:code)", "--methods");
+          throw Error("unknown VCAR variant '" + r.variant + "' (vcar:paper, vcar:robust, vcar:code or vcar:lean)", "--methods");
         }
         CachedCoarse cached(seg.fn, names, by_frame);
         LastRenders renderer(renderer_);
@@ -760,7 +770,7 @@ int main(int argc, char** argv) {
     else {
       std::fprintf(stderr, "usage: %s [--quick] [--out DIR] [--stage FILE] [--seeds tuning|heldout|all|N,N,...] "
                            "[--targets a,b] [--rigs forward,orbit] [--segmenters grabcut,oracle,oracle-sam,oracle-sam-nodrift] "
-                           "[--methods vcar:paper,vcar:robust,vcar:code,naive,sagd,flashsplat,gaussiancut,ludvig,lbg] "
+                           "[--methods vcar:paper,vcar:robust,vcar:code,vcar:lean,naive,sagd,flashsplat,gaussiancut,ludvig,lbg] "
                            "[--width W --height H] [--set key=value]... (vcar:robust only) "
                            "[--sam key=value]... (oracle-sam's levels: p_wrong, p_part, p_leak, leak_px, drift_px) "
                            "[--isnet CMD] (the isnet segmenter's program)\n", argv[0]);

@@ -26,14 +26,14 @@ plt.rcParams["svg.fonttype"] = "none"  # text stays text (smaller, diff-able)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PEERS = ["naive", "sagd", "flashsplat", "gaussiancut", "ludvig", "lbg"]
-METHODS = ["vcar:paper", "vcar:robust", "vcar:code"] + PEERS
+METHODS = ["vcar:paper", "vcar:robust", "vcar:code", "vcar:lean"] + PEERS
 SEGMENTERS = ["grabcut", "isnet", "oracle", "oracle-sam-nodrift", "oracle-sam"]
 RIGS = ["forward", "orbit"]
 NUM = {"seed", "gaussians", "object_gaussians", "width", "height", "n_train", "n_eval", "miou", "macc", "miou_01",
        "boundary_iou", "boundary_f1", "f1_3d", "precision_3d", "recall_3d", "selected", "t_render", "t_segment",
        "t_method", "time_s", "frames_segmented", "n_coarse", "n_fine", "mask_iou", "mask_none", "mask_frames"}
 LABEL = {"vcar:paper": "VCAR, paper preset", "vcar:robust": "vcar default (robust)",
-         "vcar:code": "VCAR, released code's preset"}
+         "vcar:code": "VCAR, released code's preset", "vcar:lean": "VCAR paper preset + R3 + R13 (issue 47)"}
 SEG_LABEL = {"grabcut": "GrabCut", "isnet": "ISNet", "oracle": "oracle (rendered)",
              "oracle-sam-nodrift": "oracle + SAM-like failures, no drift",
              "oracle-sam": "oracle + SAM-like failures with drift"}
@@ -188,6 +188,7 @@ for i, k in enumerate(PEERS):
 STYLE["vcar:paper"] = dict(color="black", marker="*")
 STYLE["vcar:robust"] = dict(color="crimson", marker="*")
 STYLE["vcar:code"] = dict(color="grey", marker="P")
+STYLE["vcar:lean"] = dict(color="darkorange", marker="X")
 
 
 def chart(rows, metric, name, ylabel):

@@ -21,7 +21,7 @@ ROOT="$(cd "$(dirname "$0")/../.." && pwd)"
 SEEDS=${FIELD_SEEDS:-heldout}
 PARTS=${FIELD_PARTS:-forward orbit isnet}
 [ -x "$B" ] || { echo "$B not found (configure with -DVCAR_BUILD_BENCHMARKS=ON)" >&2; exit 2; }
-M=vcar:paper,vcar:robust,vcar:code,naive,sagd,flashsplat,gaussiancut,ludvig
+M=vcar:paper,vcar:robust,vcar:code,vcar:lean,naive,sagd,flashsplat,gaussiancut,ludvig
 ISNET="node $ROOT/examples/segmenters/isnet/isnet.mjs"
 mkdir -p "$OUT"
 
