@@ -99,11 +99,15 @@ public:
       objects.push_back(std::move(o));
     }
     vcar::web::ObjectFrameMaskFn custom;
-    if (is_function(options, "segmenter"))
-      custom = [options](std::size_t object, std::size_t k, const vcar::Camera& cam, const vcar::ImageRGB8& rgb,
-                         const vcar::Prompt& p, bool subset, const vcar::web::FrameBox& box) {
-        return frame_hook(options, val(static_cast<int>(object)))(k, cam, rgb, p, subset, box);
+    if (is_function(options, "segmenter")) {
+      std::vector<vcar::web::FrameMaskFn> hooks;  // one per object, made once
+      for (int k = 0; k < count; ++k) hooks.push_back(frame_hook(options, val(k)));
+      custom = [hooks = std::move(hooks)](std::size_t object, std::size_t k, const vcar::Camera& cam,
+                                          const vcar::ImageRGB8& rgb, const vcar::Prompt& p, bool subset,
+                                          const vcar::web::FrameBox& box) {
+        return hooks.at(object)(k, cam, rgb, p, subset, box);
       };
+    }
     const vcar::MultiSegmentation& m = s_.segment_objects(camera_from_js(camera), objects, options_of(options),
                                                           progress_of(progress), custom);
     val out = val::array();

@@ -57,6 +57,15 @@ const base = `http://127.0.0.1:${server.address().port}`;
 
 function fail(msg) { console.error('FAIL: ' + msg); process.exitCode = 1; }
 
+// The native twin on the same scene, cameras, view, segmenter and view size, with `prompt`
+// (['--click', 'u,v'] or ['--objects', 'u,v;u,v']): its JSON.
+function runNative(prompt) {
+  return JSON.parse(execFileSync(native, ['--scene', scene, ...prompt, '--segmenter', segmenter,
+    ...(maxSide ? ['--max-side', String(maxSide)] : []),
+    ...(args.cameras ? ['--cameras', path.resolve(args.cameras)] : []), ...(args.view ? ['--view', args.view] : [])],
+    { encoding: 'utf8', stdio: ['ignore', 'pipe', 'inherit'] }));
+}
+
 const browser = await puppeteer.launch({
   executablePath: chromium, headless: true,
   args: ['--no-sandbox', '--enable-unsafe-swiftshader', '--use-angle=swiftshader', '--ignore-gpu-blocklist', '--window-size=1200,700'],
@@ -134,10 +143,7 @@ try {
   }, kind);
   const obj = await header('object'), rem = await header('removed'), st = await header('state');
 
-  const nat = JSON.parse(execFileSync(native, ['--scene', scene, '--click', click, '--segmenter', segmenter,
-    ...(maxSide ? ['--max-side', String(maxSide)] : []),
-    ...(args.cameras ? ['--cameras', path.resolve(args.cameras)] : []), ...(args.view ? ['--view', args.view] : [])],
-    { encoding: 'utf8', stdio: ['ignore', 'pipe', 'inherit'] }));
+  const nat = runNative(['--click', click]);
   const a = new Set(result.indices), b = new Set(nat.indices);
   let inter = 0;
   for (const i of a) inter += b.has(i);
@@ -163,10 +169,7 @@ try {
     await page.waitForFunction(() => document.getElementById('vcar-result').textContent.length > 0, { timeout: timeoutMs, polling: 500 });
     const multi = JSON.parse(await page.$eval('#vcar-result', (e) => e.textContent));
     if (multi.error) throw new Error('page (objects): ' + multi.error + '\n' + logs.join('\n'));
-    const natMulti = JSON.parse(execFileSync(native, ['--scene', scene, '--objects', args.objects, '--segmenter', segmenter,
-      ...(maxSide ? ['--max-side', String(maxSide)] : []),
-      ...(args.cameras ? ['--cameras', path.resolve(args.cameras)] : []), ...(args.view ? ['--view', args.view] : [])],
-      { encoding: 'utf8', stdio: ['ignore', 'pipe', 'inherit'] }));
+    const natMulti = runNative(['--objects', args.objects]);
     const wanted = args.objects.split(';').length;
     const seen = new Set();
     let shared = 0;
