@@ -39,6 +39,9 @@
 //    levels of sam_levels() below (--sam changes them);
 //  - oracle-sam-nodrift: oracle-sam without its drift along the sequence (the same per-frame
 //    draws), so the field tells the per-frame failures from the drift;
+//  - exact (only when named): synth::OracleSegmenter by name, no failure: the target where it is
+//    the nearest surface in the capture's frames, the target alone (its render, alpha > 0.5) in
+//    the fine round's. Issue 47's soft-edge case: the object's own faint edge Gaussians must stay;
 //  - isnet (only when named): ISNet through the external segmenter protocol
 //    (examples/segmenters/isnet, installed by its install.sh), each frame cut around the
 //    prompt's box lifted into it, as `vcar segment --segmenter-cmd`.
@@ -144,8 +147,9 @@ synth::SamFailures sam_levels(int width, const std::vector<std::string>& overrid
 }
 
 const std::vector<std::string> kSegmenters = {"grabcut", "oracle", "oracle-sam", "oracle-sam-nodrift"};
-// Segmenters run only when named (--segmenters): ISNet costs 4-10 s a frame on 2 cores.
-const std::vector<std::string> kNamedOnly = {"isnet"};
+// Segmenters run only when named (--segmenters): ISNet costs 4-10 s a frame on 2 cores; exact is
+// a ceiling, not a segmenter.
+const std::vector<std::string> kNamedOnly = {"isnet", "exact"};
 const std::vector<std::string> kRigs = {"forward", "orbit"};
 
 std::vector<std::string> all_methods() {
@@ -388,7 +392,7 @@ std::vector<Cell> plan_cells(const Options& o) {
   for (const Cell& c : cells) {
     if (std::find(kSegmenters.begin(), kSegmenters.end(), c.segmenter) == kSegmenters.end() &&
         std::find(kNamedOnly.begin(), kNamedOnly.end(), c.segmenter) == kNamedOnly.end())
-      throw Error("unknown segmenter '" + c.segmenter + "' (grabcut, oracle, oracle-sam, oracle-sam-nodrift, isnet)", "--segmenters");
+      throw Error("unknown segmenter '" + c.segmenter + "' (grabcut, oracle, oracle-sam, oracle-sam-nodrift, isnet, exact)", "--segmenters");
     if (std::find(kRigs.begin(), kRigs.end(), c.rig) == kRigs.end())
       throw Error("unknown rig '" + c.rig + "' (forward, orbit)", "--rigs");
     const std::vector<std::string> known = all_methods();
@@ -572,10 +576,10 @@ private:
               },
               secs};
     }
-    if (name != "oracle" && name != "oracle-sam" && name != "oracle-sam-nodrift")
+    if (name != "oracle" && name != "oracle-sam" && name != "oracle-sam-nodrift" && name != "exact")
       throw Error("unknown segmenter '" + name + "'", "--segmenters");
     synth::OracleParams p;
-    p.mode = synth::OracleMode::rendered;
+    p.mode = name == "exact" ? synth::OracleMode::by_name : synth::OracleMode::rendered;
     p.seed = static_cast<std::uint64_t>(k.seed) * 7919u + 13u;
     if (name == "oracle-sam") p.sam = sam_levels(width_, opt_.sam);
     if (name == "oracle-sam-nodrift") {  // the same draws per frame, without the sequence's drift

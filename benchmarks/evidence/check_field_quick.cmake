@@ -1,9 +1,10 @@
 # CTest: runs `bench_field --quick` and checks its CSV: one row per segmenter x method (oracle,
 # and grabcut when GRABCUT is ON) on the forward rig, seed 1 (role tuning), target donut, with
 # 3D F1, mIoU and the masks' 2D IoU in [0, 1]; and guards the VCAR rows' 3D F1: each at least
-# its value measured on 2026-12-02 (x86-64, AVX-512) minus 0.02, and the default at least the
-# paper preset's with the honest oracle's masks. With GrabCut's masks the default is below the
-# paper preset here (0.937 against 0.993): issue 47's open failure, not guarded.
+# its value measured on 2026-12-02 (x86-64, AVX-512; the default of that day: tau_fine 0.7, R13
+# on, R5 off) minus 0.02, the default at least the paper preset's with the honest oracle's masks,
+# and at most 0.01 below it with GrabCut's (issue 47's bar is 0.005 on the held-out seeds at full
+# size; here, seed 1 at the quick size, it measures 0.987 against 0.993).
 #   cmake -DBENCH=<bench_field> -DOUT=<dir> [-DGRABCUT=ON] -P check_field_quick.cmake
 if(NOT BENCH OR NOT OUT)
   message(FATAL_ERROR "usage: cmake -DBENCH=<bench_field> -DOUT=<dir> [-DGRABCUT=ON] -P check_field_quick.cmake")
@@ -62,9 +63,9 @@ foreach(seg ${segmenters})
 endforeach()
 # The guards (3D F1 measured on 2026-12-02 minus 0.02).
 set(floor_oracle_paper 0.835)   # measured 0.855
-set(floor_oracle_robust 0.955)  # measured 0.975
+set(floor_oracle_robust 0.883)  # measured 0.903
 set(floor_grabcut_paper 0.973)  # measured 0.993
-set(floor_grabcut_robust 0.917) # measured 0.937
+set(floor_grabcut_robust 0.967) # measured 0.987
 foreach(seg ${segmenters})
   foreach(v paper robust)
     if(f1_${seg}_${v} LESS floor_${seg}_${v})
@@ -74,6 +75,22 @@ foreach(seg ${segmenters})
 endforeach()
 if(f1_oracle_robust LESS f1_oracle_paper)
   message(FATAL_ERROR "the default (${f1_oracle_robust}) below the paper preset (${f1_oracle_paper}) with the oracle's masks")
+endif()
+# CMake has no float arithmetic: F1 in thousandths ("0.993294" -> 993, "1" -> 1000).
+function(thousandths value out)
+  string(REGEX MATCH "^([01])(\\.([0-9]*))?$" m "${value}")
+  set(frac "${CMAKE_MATCH_3}000")
+  string(SUBSTRING "${frac}" 0 3 frac)
+  math(EXPR k "${CMAKE_MATCH_1} * 1000 + 1${frac} - 1000")
+  set(${out} ${k} PARENT_SCOPE)
+endfunction()
+if(GRABCUT)
+  thousandths("${f1_grabcut_paper}" paper_k)
+  thousandths("${f1_grabcut_robust}" robust_k)
+  math(EXPR gap "${paper_k} - ${robust_k}")
+  if(gap GREATER 10)
+    message(FATAL_ERROR "the default (${f1_grabcut_robust}) more than 0.01 below the paper preset (${f1_grabcut_paper}) with GrabCut's masks")
+  endif()
 endif()
 message(STATUS "field quick: ${n} lines, every segmenter x method present; 3D F1 oracle paper ${f1_oracle_paper} "
                "robust ${f1_oracle_robust}; grabcut paper ${f1_grabcut_paper} robust ${f1_grabcut_robust}")

@@ -73,7 +73,9 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
   const auto r = VcarParams::robust();
   CHECK(r.fine_occlusion);
   CHECK(r.coarse_occlusion);
-  CHECK(r.foreshortening);
+  CHECK_FALSE(r.foreshortening);  // R5: off since the field (docs/robust.md)
+  CHECK(r.view_reliability);      // R13
+  CHECK(r.tau_fine == 0.7f);
   CHECK(r.undershoot_band > 0.f);
   CHECK(r.undershoot_gate);  // R6c
   CHECK(r.tau_strict > r.tau_fine);
@@ -87,6 +89,7 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
   for (const auto& p : {VcarParams::nvos(), VcarParams::lerf(), VcarParams::reference_code()}) {
     CHECK_FALSE(p.robust_vote());
     CHECK_FALSE(p.foreshortening);
+    CHECK_FALSE(p.view_reliability);
     CHECK(p.undershoot_band == 0.f);
     CHECK_FALSE(p.undershoot_gate);
     CHECK(p.tau_strict <= p.tau_fine);  // Eq. R7 off

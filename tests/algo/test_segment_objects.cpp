@@ -59,7 +59,9 @@ vcar::Mask ball_mask(const vcar::Camera& c, const Eigen::Vector3f& centre, float
   return m;
 }
 
-// A single-object segmenter answering one ball's disc in every frame.
+// A single-object segmenter answering one ball's disc in every frame but view v7, where it
+// answers a part of it (a disc of half the radius: a SAM-like failure, so that view reliability,
+// Eq. R13, weighs the views unequally).
 struct BallSegmenter {
   Eigen::Vector3f centre;
   float grow = 0.08f;
@@ -67,7 +69,8 @@ struct BallSegmenter {
   void segment(const vcar::FrameSequence& f, const vcar::Prompt&, const vcar::MaskSink& sink) {
     ++calls;
     for (std::size_t k = 0; k < f.size(); ++k) {
-      const vcar::Mask m = ball_mask(f.cameras[k], centre, grow);
+      const bool part = f.cameras[k].name == "v7";
+      const vcar::Mask m = ball_mask(f.cameras[k], centre, part ? -0.5f * Balls::radius : grow);
       sink(k, &m);
     }
   }
@@ -80,7 +83,11 @@ TEST_CASE("segment_objects: each object as its own vcar::segment run, in two seg
   const Balls b = two_balls();
   const auto cams = rig();
   vcar::cpu::TiledRenderer renderer;
-  for (const vcar::VcarParams& params : {vcar::VcarParams::nvos(), vcar::VcarParams::robust()}) {
+  vcar::VcarParams reliability = vcar::VcarParams::nvos();
+  reliability.view_reliability = true;  // R13 alone (the default has it too)
+  vcar::VcarParams coarse_only = reliability;  // the final scores are then the coarse round's R13 vote
+  coarse_only.enable_sss = false;
+  for (const vcar::VcarParams& params : {vcar::VcarParams::nvos(), vcar::VcarParams::robust(), reliability, coarse_only}) {
     std::vector<BallSegmenter> per = {{b.centre[0]}, {b.centre[1]}};
     std::vector<vcar::ObjectPrompt> objects(2);
     objects[0].name = "left";

@@ -22,7 +22,10 @@ set_tests_properties(segmenters/isnet PROPERTIES SKIP_RETURN_CODE 77 TIMEOUT 900
 if(VCAR_NODE_EXECUTABLE AND DEFINED _stage_ds)
   add_test(NAME segmenters/isnet_stage
     COMMAND ${_isnet_dir}/test_isnet_stage.sh $<TARGET_FILE:vcar_cli> ${_stage_ds}
-            ${CMAKE_CURRENT_BINARY_DIR}/isnet_stage_test 0.75)  # measured: 3D F1 0.820 (precision 0.698, recall 0.995), mIoU 0.646
+            ${CMAKE_CURRENT_BINARY_DIR}/isnet_stage_test 0.70)
+  # Measured with the default of 2026-12-02: 3D F1 0.744 (precision 0.593, recall 0.997), mIoU
+  # 0.642; with the previous default 0.820 (precision 0.698): on this coarse-only 160 x 120 case
+  # each change alone: R13 off 0.775, R5 on 0.762; docs/notes/default-2026-12-02.md).
   set_tests_properties(segmenters/isnet_stage PROPERTIES SKIP_RETURN_CODE 77 TIMEOUT 900 RUN_SERIAL TRUE
                        LABELS isnet FIXTURES_REQUIRED vcar_cli_stage)
 endif()

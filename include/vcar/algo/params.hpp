@@ -157,22 +157,23 @@ struct VcarParams {
     p.force_fine_round = true;
     return p;
   }
-  // vcar's default (beyond the paper, docs/robust.md): tau_coarse 0.5, tau_fine 0.5, the
-  // evidence levels (R2) with the occlusion test in both rounds (R3), views weighted by
-  // foreshortening (R5), the fine round's band as wide as the masks'
-  // measured undershoot (R6) where the vote without it splits (R6c), the strict threshold 0.85
-  // when the fine vote is decisive (R7), ABR on masks widened by their undershoot when it is
-  // split, on their own footprints (R8), hidden candidates on a seen background plane dropped
-  // (R10), masks that reach 1 px or more past the render's occlusion edges eroded (R11) and
-  // masks that stop short of them grown to them (R12). What vcar::segment uses when given no
-  // parameters. (R1, an edge band, R4, unseen candidates kept, and R9, a second pass from a
-  // lower coarse threshold, were removed: inert in every preset and ablation; docs/robust.md.)
+  // vcar's default (beyond the paper, docs/robust.md): tau_coarse 0.5, tau_fine 0.7, the
+  // evidence levels (R2) with the occlusion test in both rounds (R3), the fine round's band as
+  // wide as the masks' measured undershoot (R6) where the vote without it splits (R6c), the
+  // strict threshold 0.85 when the fine vote is decisive (R7), ABR on masks widened by their
+  // undershoot when it is split, on their own footprints (R8), hidden candidates on a seen
+  // background plane dropped (R10), masks that reach 1 px or more past the render's occlusion
+  // edges eroded (R11), masks that stop short of them grown to them (R12), and each view
+  // weighted by how its mask agrees with the round's consensus (R13). What vcar::segment uses
+  // when given no parameters. Chosen on the field's tuning seed and the synthetic suite
+  // (docs/notes/default-2026-12-02.md): fine threshold 0.7 (0.5 let GrabCut's leaks through,
+  // 0.8 lost eroded masks' rims), R13 on (SAM-like drift), R5 off (foreshortening; no longer
+  // paying). (R1, R4 and R9 were removed earlier: inert in every preset and ablation.)
   static VcarParams robust() {
     VcarParams p;
-    p.tau_fine = 0.5f;
+    p.tau_fine = 0.7f;
     p.fine_occlusion = true;
     p.coarse_occlusion = true;
-    p.foreshortening = true;
     p.undershoot_band = 1.5f;
     p.undershoot_gate = true;
     p.tau_strict = 0.85f;
@@ -181,6 +182,7 @@ struct VcarParams {
     p.coplanar_radius = 0.75f;
     p.overshoot_min = 1.f;
     p.grow_max = 0.1f;
+    p.view_reliability = true;
     return p;
   }
   // A preset by name: robust, nvos, lerf, reference_code; vcar::Error otherwise.

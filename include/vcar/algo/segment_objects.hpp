@@ -81,6 +81,7 @@ void refine_objects(const GaussianScene& scene, const std::vector<Camera>& train
     Diagnostics& d = results[o].diagnostics;
     d.overshoot_eroded = votes[o]->overshoot_eroded();
     d.masks_grown = votes[o]->grown();
+    votes[o]->weigh_views(params.tau_coarse);  // Eq. R13, as vcar::segment after its coarse round
     std::vector<Index> selected;
     std::vector<float> scores;
     votes[o]->selected(params.tau_coarse, selected, scores);
