@@ -5,7 +5,7 @@
 //
 //   bench_field [--quick] [--out DIR] [--stage FILE] [--seeds tuning|heldout|all|N,N,...]
 //               [--targets a,b] [--rigs forward,orbit]
-//               [--segmenters grabcut,oracle,oracle-sam,oracle-sam-nodrift]
+//               [--segmenters grabcut,oracle,oracle-sam,oracle-sam-nodrift,isnet,exact]
 //               [--methods vcar:paper,vcar:robust,vcar:code,naive,...] [--width W --height H]
 //               [--set key=value]... (VcarParams of the vcar:robust runs only: tuning the default)
 //               [--sam key=value]... (oracle-sam's levels instead of sam_levels': p_wrong, p_part,
@@ -773,7 +773,7 @@ int main(int argc, char** argv) {
     else if (a == "--height") o.height = std::stoi(value());
     else {
       std::fprintf(stderr, "usage: %s [--quick] [--out DIR] [--stage FILE] [--seeds tuning|heldout|all|N,N,...] "
-                           "[--targets a,b] [--rigs forward,orbit] [--segmenters grabcut,oracle,oracle-sam,oracle-sam-nodrift] "
+                           "[--targets a,b] [--rigs forward,orbit] [--segmenters grabcut,oracle,oracle-sam,oracle-sam-nodrift,isnet,exact] "
                            "[--methods vcar:paper,vcar:robust,vcar:code,vcar:lean,naive,sagd,flashsplat,gaussiancut,ludvig,lbg] "
                            "[--width W --height H] [--set key=value]... (vcar:robust only) "
                            "[--sam key=value]... (oracle-sam's levels: p_wrong, p_part, p_leak, leak_px, drift_px) "
