@@ -167,8 +167,9 @@ struct VcarParams {
   // weighted by how its mask agrees with the round's consensus (R13). What vcar::segment uses
   // when given no parameters. Chosen on the field's tuning seed and the synthetic suite
   // (docs/notes/default-2026-12-02.md): fine threshold 0.7 (0.5 let GrabCut's leaks through,
-  // 0.8 lost eroded masks' rims), R13 on (SAM-like drift), R5 off (foreshortening; no longer
-  // paying). (R1, R4 and R9 were removed earlier: inert in every preset and ablation.)
+  // 0.8 lost eroded masks' rims), R13 on (SAM-like drift), R5 off (foreshortening: never
+  // better on the field's tuning seed, a trade of mIoU for 3D F1 on the synthetic suite). (R1,
+  // R4 and R9 were removed earlier: inert in every preset and ablation.)
   static VcarParams robust() {
     VcarParams p;
     p.tau_fine = 0.7f;
