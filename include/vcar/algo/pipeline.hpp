@@ -28,6 +28,19 @@
 
 namespace vcar {
 
+namespace detail {  // vcar::detail
+// The end of a coarse round, shared by vcar::segment and vcar::segment_objects: the round's mask
+// edits counted (Eq. R11, R12), its views weighed by their agreement (Eq. R13), and G_coarse
+// selected at tau_coarse (Eq. 3, or the robust vote's R2-R6) with its scores.
+inline void coarse_selection(RoundVote& coarse, const VcarParams& params, Diagnostics& diag,
+                             std::vector<Index>& selected, std::vector<float>& scores) {
+  diag.overshoot_eroded = coarse.overshoot_eroded();
+  diag.masks_grown = coarse.grown();
+  coarse.weigh_views(params.tau_coarse);  // Eq. R13
+  coarse.selected(params.tau_coarse, selected, scores);
+}
+}  // namespace detail
+
 // Segments the object prompted on train_cameras[prompt.reference_view].
 // Throws vcar::Error for bad input (empty scene, no cameras, reference view out of range,
 // invalid parameters, a failing segmenter or a wrong-size mask, naming the view) and
@@ -85,12 +98,9 @@ SegmentationResult segment(const GaussianScene& scene, const std::vector<Camera>
   timing("coarse_render", t1.render);
   timing("coarse_segment", t1.total - t1.render - t1.voting);
   timing("coarse_voting", setup + t1.voting);
-  diag.overshoot_eroded = coarse.overshoot_eroded();
-  diag.masks_grown = coarse.grown();
-  coarse.weigh_views(params.tau_coarse);  // Eq. R13
   std::vector<Index> selected;  // G_coarse (Eq. 3 at tau_coarse)
   std::vector<float> scores;
-  coarse.selected(params.tau_coarse, selected, scores);
+  detail::coarse_selection(coarse, params, diag, selected, scores);
   const bool complete = detail::refine(
       scene, train_cameras, prompt, renderer, segmenter, params, progress, t_start, train_masks, std::move(selected),
       std::move(scores), result, "fine round", coarse.occlusion() ? coarse.unoccluded_views() : std::span<const std::uint16_t>{});

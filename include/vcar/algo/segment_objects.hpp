@@ -78,13 +78,9 @@ void refine_objects(const GaussianScene& scene, const std::vector<Camera>& train
   std::vector<double> own_s(K, 0.0);  // each object's time outside the shared call's segmenter
   for (std::size_t o = 0; o < K; ++o) {
     const auto to = Clock::now();
-    Diagnostics& d = results[o].diagnostics;
-    d.overshoot_eroded = votes[o]->overshoot_eroded();
-    d.masks_grown = votes[o]->grown();
-    votes[o]->weigh_views(params.tau_coarse);  // Eq. R13, as vcar::segment after its coarse round
     std::vector<Index> selected;
     std::vector<float> scores;
-    votes[o]->selected(params.tau_coarse, selected, scores);
+    coarse_selection(*votes[o], params, results[o].diagnostics, selected, scores);  // as vcar::segment
     refine[o] = std::make_unique<ObjectRefinement>(scene, train_cameras, objects[o].prompt, params,
                                                                  train_masks[o], std::move(selected), std::move(scores),
                                                                  results[o]);
