@@ -8,7 +8,9 @@
 //     select, with ABR from scratch and incremental (its coarse_voting line is the vote's share);
 // at 1 thread and at every available thread. Checks that Reselection's selection and log-scales
 // equal vcar::segment's, and prints the peak resident memory.
-//   bench_reselect [N=1000000] [M=100] [W=1008] [H=756]
+//   bench_reselect [N=1000000] [M=100] [W=1008] [H=756] [PRESET=nvos]
+// PRESET robust (the default preset of vcar::segment and Reselection) makes the session render
+// every view once (its construct line) and vote every view again on each select.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -55,6 +57,7 @@ int main(int argc, char** argv) {
   const std::size_t N = argc > 1 ? std::stoul(argv[1]) : 1000000;
   const int M = argc > 2 ? std::stoi(argv[2]) : 100;
   const int W = argc > 3 ? std::stoi(argv[3]) : 1008, H = argc > 4 ? std::stoi(argv[4]) : 756;
+  const std::string preset = argc > 5 ? argv[5] : "nvos";
   const int threads = vcar::max_threads();
 
   vcar::synth::WorldParams wp;
@@ -73,8 +76,9 @@ int main(int argc, char** argv) {
   std::printf("peak memory after the scene and %d masks: %.0f MiB\n", M, peak_rss_mib());
 
   vcar::cpu::TiledRenderer renderer;
-  vcar::VcarParams params = vcar::VcarParams::nvos();
+  vcar::VcarParams params = vcar::VcarParams::preset(preset);
   params.enable_sss = false;
+  std::printf("preset %s, SSS off\n", preset.c_str());
   // The masks are in hand: the segmenter hands out pointers to them (no copy).
   auto segmenter = vcar::make_streaming_segmenter(
       [&](const vcar::FrameSequence& f, const vcar::Prompt&, const vcar::MaskSink& sink) {
@@ -125,8 +129,8 @@ int main(int argc, char** argv) {
     }
 
     std::optional<vcar::Reselection> session;
-    const double build = median_seconds(1, [&] { session.emplace(world.scene, rig.train, params); });
-    std::printf("%-46s %8d %10.4f\n", "Reselection: construct (Morton order, copies)", t, build);
+    const double build = median_seconds(1, [&] { session.emplace(world.scene, rig.train, renderer, params); });
+    std::printf("%-46s %8d %10.4f\n", "Reselection: construct (Morton order or renders)", t, build);
     vcar::SegmentationResult first;
     const double full = median_seconds(1, [&] {
       for (int j = 0; j < M; ++j) session->set_mask(static_cast<std::size_t>(j), &masks[j]);

@@ -4,7 +4,11 @@
 // changed (the vote counters and ABR's per-Gaussian state), so a fix costs a fraction of a
 // full selection.
 //
-//   example_reselect [gaussians=200000] [views=60]
+//   example_reselect [gaussians=200000] [views=60] [preset=robust]
+//
+// The default preset (robust) reads each view's render: the session renders every training view
+// once (CPU renderer) and votes all views again on each select(); a paper preset (nvos) needs no
+// renders and takes back only the changed view's votes.
 //
 // The scene is synthetic (a 360-degree capture around a table with objects), so the true
 // Gaussians of the target are known and each step prints 3D precision and recall. The
@@ -17,6 +21,7 @@
 #include <vector>
 
 #include "vcar/algo/reselection.hpp"
+#include "vcar/backends/cpu/tiled_renderer.hpp"
 #include "vcar/eval/selection_metrics.hpp"
 #include "vcar/synth/ground_truth.hpp"
 #include "vcar/synth/mask_ops.hpp"
@@ -39,7 +44,14 @@ int main(int argc, char** argv) {
   const std::size_t n = argc > 1 ? std::strtoul(argv[1], nullptr, 10) : 200000;
   const int views = argc > 2 ? std::atoi(argv[2]) : 60;
   if (n < 1000 || views < 4) {
-    std::fprintf(stderr, "usage: example_reselect [gaussians >= 1000] [views >= 4]\n");
+    std::fprintf(stderr, "usage: example_reselect [gaussians >= 1000] [views >= 4] [preset: robust|nvos|lerf]\n");
+    return 2;
+  }
+  vcar::VcarParams params;
+  try {
+    params = vcar::VcarParams::preset(argc > 3 ? argv[3] : "robust");
+  } catch (const vcar::Error& e) {
+    std::fprintf(stderr, "example_reselect: %s\n", e.what());
     return 2;
   }
   vcar::synth::WorldParams wp;
@@ -54,10 +66,13 @@ int main(int argc, char** argv) {
   std::printf("scene: %zu Gaussians, %d views at 640x480; the target has %zu Gaussians\n", world.scene.size(), views,
               truth.size());
 
-  // The paper's vote (Eq. 1-3) and ABR; SSS needs a renderer and a segmenter (vcar::segment).
-  vcar::VcarParams params = vcar::VcarParams::nvos();
+  // The vote and ABR; SSS needs a segmenter for its sampled views (vcar::segment).
   params.enable_sss = false;
-  vcar::Reselection session(world.scene, rig.train, params);
+  vcar::cpu::TiledRenderer renderer;
+  const auto t_build = Clock::now();
+  vcar::Reselection session(world.scene, rig.train, renderer, params);
+  std::printf("session built in %.1f ms (renders of the %d views when the preset reads them)\n",
+              1e3 * std::chrono::duration<double>(Clock::now() - t_build).count(), views);
 
   std::vector<vcar::Mask> right;  // the masks the user will end up with
   for (const vcar::Camera& cam : rig.train) right.push_back(vcar::synth::visible_mask(world, cam, world.target_id));

@@ -12,6 +12,7 @@
 #include "params.hpp"
 #include "result.hpp"
 #include "vcar/algo/reselection.hpp"
+#include "vcar/backends/cpu/tiled_renderer.hpp"
 
 namespace vcar::python {
 
@@ -20,7 +21,7 @@ namespace {
 class ReselectionPy {
 public:
   ReselectionPy(py::object scene, py::object cameras, py::object params)
-      : params_(params.is_none() ? VcarParams::nvos() : params_from(params)), cameras_(cameras_from(cameras)) {
+      : params_(params.is_none() ? VcarParams::robust() : params_from(params)), cameras_(cameras_from(cameras)) {
     if (cameras_.empty()) throw Error("no cameras", "cameras");
     {
       SceneUse use(scene_from(scene));
@@ -31,7 +32,11 @@ public:
       geometry_.log_scale = g.log_scale;
       geometry_.opacity_logit = g.opacity_logit;
     }
-    session_.emplace(geometry_, cameras_, params_);
+    // The robust presets read each training view's alpha and depth, rendered once here on the
+    // CPU (geometry and opacity are all a render's alpha and depth need); the paper presets none.
+    py::gil_scoped_release nogil;
+    cpu::TiledRenderer renderer;
+    session_.emplace(geometry_, cameras_, renderer, params_);
   }
 
   void set_mask(std::size_t view, py::object mask) {
@@ -87,7 +92,8 @@ void register_reselection(py::module_& m) {
                             "vcar.segment with SSS off, reusing the previous call's votes and ABR state.")
       .def(py::init<py::object, py::object, py::object>(), py::arg("scene"), py::arg("cameras"),
            py::arg("params") = py::none(),
-           "params: as vcar.segment's; None = the 'nvos' preset (the robust vote needs renders)")
+           "params: as vcar.segment's; None = the default ('robust': each training view is rendered once "
+           "on the CPU for its alpha and depth; 'nvos' needs no renders and votes incrementally)")
       .def("set_mask", &ReselectionPy::set_mask, py::arg("view"), py::arg("mask"),
            "Sets, replaces or (None) clears the mask of training view `view` (a bool or uint8 array, H x W).")
       .def("select", &ReselectionPy::select, py::arg("reference_view") = 0,

@@ -1,5 +1,6 @@
 """vcar.Reselection: masks set one view at a time, the selection equal to vcar.segment's with the
-same masks (nvos preset, SSS off) after every edit, the incremental path taken, bad input."""
+same masks (nvos preset, SSS off) after every edit, the incremental path taken, the default preset
+(robust) equal to vcar.segment's too, bad input."""
 import numpy as np
 import pytest
 
@@ -43,6 +44,35 @@ def test_reselection_follows_edits_like_segment(world, rig):
     assert session.masks == len(cams) - 1
 
 
+def test_reselection_default_preset_equals_segment(world, rig):
+    """The default (robust) reads each view's render: the session renders them once; its selection
+    equals vcar.segment's with the same masks and SSS off, before and after an edit."""
+    cams = rig.train
+    held = [world.visible_mask(c) for c in cams]
+    params = ("robust", {"enable_sss": False})
+
+    def segment_with(masks):
+        def segmenter(request):
+            return [masks[k] for k in range(len(request.cameras))]
+        return vcar.segment(world.scene, cams, {"reference_view": 0}, segmenter, params=params)
+
+    session = vcar.Reselection(world.scene, cams, params)
+    for k, m in enumerate(held):
+        session.set_mask(k, m)
+    first = session.select()
+    want = segment_with(held)
+    np.testing.assert_array_equal(first["indices"], want["indices"])
+    np.testing.assert_array_equal(first["log_scales"], want["log_scales"])
+    held[2] = None
+    session.set_mask(2, None)
+    second = session.select()
+    np.testing.assert_array_equal(second["indices"], segment_with(held)["indices"])
+    default = vcar.Reselection(world.scene, cams)  # no params: robust, SSS reported only
+    for k, m in enumerate(held):
+        default.set_mask(k, m)
+    np.testing.assert_array_equal(default.select()["indices"], second["indices"])
+
+
 def test_reselection_copies_the_geometry(world, rig):
     """Edits of the scene's arrays after the session was made do not leak into it."""
     scene = vcar.Scene(world.scene.means.copy(), world.scene.quats.copy(), world.scene.log_scales.copy(),
@@ -66,8 +96,8 @@ def test_reselection_bad_input(world, rig):
         session.set_mask(len(rig.train), np.zeros((c.height, c.width), bool))
     with pytest.raises(vcar.Error):
         session.set_mask(0, np.zeros((c.height + 1, c.width), bool))
-    with pytest.raises(vcar.Error, match="renders"):
-        vcar.Reselection(world.scene, rig.train, "robust")
+    with pytest.raises(vcar.Error, match="occlusion_aware"):
+        vcar.Reselection(world.scene, rig.train, ("nvos", {"occlusion_aware": True}))
     with pytest.raises(vcar.Error):
         vcar.Reselection(world.scene, [])
     assert session.select()["diagnostics"]["note"] != ""

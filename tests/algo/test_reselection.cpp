@@ -3,6 +3,8 @@
 #include <random>
 
 #include "vcar/algo/reselection.hpp"
+#include "vcar/backends/cpu/tiled_renderer.hpp"
+#include "vcar/synth/mask_ops.hpp"
 
 #include "point_scene.hpp"
 
@@ -51,13 +53,9 @@ vcar::VcarParams paper_no_sss() {
   return p;
 }
 
-vcar::SegmentationResult segment_with(const Fixture& f, const std::vector<const Mask*>& masks, const vcar::VcarParams& p) {
-  auto renderer = [](const vcar::RenderRequest& q) {
-    vcar::RenderOutput o;
-    o.rgb = vcar::ImageF(q.camera->width, q.camera->height, 3, 0.f);
-    return o;
-  };
-  auto r = vcar::make_renderer(renderer);
+template <vcar::Renderer R>
+vcar::SegmentationResult segment_with(const Fixture& f, const std::vector<const Mask*>& masks, const vcar::VcarParams& p,
+                                      R& r) {
   auto s = vcar::make_segmenter([&](const vcar::FrameSequence& fr, const vcar::Prompt&) {
     std::vector<std::optional<Mask>> out(fr.size());
     for (std::size_t k = 0; k < fr.size(); ++k)
@@ -65,6 +63,14 @@ vcar::SegmentationResult segment_with(const Fixture& f, const std::vector<const 
     return out;
   });
   return vcar::segment(f.scene, f.cams, vcar::Prompt{}, r, s, p);
+}
+vcar::SegmentationResult segment_with(const Fixture& f, const std::vector<const Mask*>& masks, const vcar::VcarParams& p) {
+  auto r = vcar::make_renderer([](const vcar::RenderRequest& q) {
+    vcar::RenderOutput o;
+    o.rgb = vcar::ImageF(q.camera->width, q.camera->height, 3, 0.f);
+    return o;
+  });
+  return segment_with(f, masks, p, r);
 }
 
 }  // namespace
@@ -122,7 +128,13 @@ TEST_CASE("Reselection reports the view-completeness gap that SSS would fill, an
   CHECK(!res.diagnostics.sss_triggered);
   CHECK(res.diagnostics.note.find("SSS") != std::string::npos);
 
-  CHECK_THROWS_AS(vcar::Reselection(f.scene, f.cams, vcar::VcarParams::robust()), vcar::Error);
+  CHECK_THROWS_AS(vcar::Reselection(f.scene, f.cams, vcar::VcarParams::robust()), vcar::Error);  // needs a renderer
+  auto no_depth = vcar::make_renderer([](const vcar::RenderRequest& q) {
+    vcar::RenderOutput o;
+    o.rgb = vcar::ImageF(q.camera->width, q.camera->height, 3, 0.f);
+    return o;
+  });
+  CHECK_THROWS_AS(vcar::Reselection(f.scene, f.cams, no_depth), vcar::Error);  // the default reads depth
   CHECK_THROWS_AS(vcar::Reselection(f.scene, {}, p), vcar::Error);
   CHECK_THROWS_AS(r.set_mask(2, &f.masks[0]), vcar::Error);         // view out of range
   const Mask small(10, 10, 1, 0);
@@ -174,4 +186,50 @@ TEST_CASE("Reselection's incremental ABR equals vcar::segment over a random sequ
   CHECK(incremental >= 8);  // the sequence exercises the incremental path
   CHECK(fresh > 0);
   CHECK(stale > 0);
+}
+
+TEST_CASE("Reselection with the default preset equals vcar::segment with the same masks and SSS off") {
+  // The default's coarse round reads renders (Eq. R3, R10-R12) and weighs views (R13): the
+  // renderer's alpha and depth are kept, each mask is edited (R11, R12) when set, and select()
+  // votes again. One mask dilated by 4 px (R11 erodes it), one eroded by 3 px (R12 may grow it).
+  const Fixture f = fixture();
+  vcar::VcarParams p = vcar::VcarParams::robust();
+  p.enable_sss = false;
+  vcar::cpu::TiledRenderer renderer;
+  vcar::Reselection r(f.scene, f.cams, renderer, p);
+  const Mask dilated = vcar::synth::dilate_erode(f.masks[2], 4), eroded = vcar::synth::dilate_erode(f.masks[5], -3);
+  std::vector<const Mask*> held(f.cams.size(), nullptr);
+  for (std::size_t j = 0; j < f.cams.size(); ++j) held[j] = j == 2 ? &dilated : j == 5 ? &eroded : &f.masks[j];
+  for (std::size_t j = 0; j < f.cams.size(); ++j) r.set_mask(j, held[j]);
+  auto same = [&](const vcar::SegmentationResult& a, const vcar::SegmentationResult& b) {
+    CHECK(a.indices == b.indices);
+    CHECK(a.scores == b.scores);
+    CHECK(a.log_scale == b.log_scale);
+    CHECK(a.diagnostics.overshoot_eroded == b.diagnostics.overshoot_eroded);
+    CHECK(a.diagnostics.masks_grown == b.diagnostics.masks_grown);
+    CHECK(a.diagnostics.coplanar_dropped == b.diagnostics.coplanar_dropped);
+    CHECK(a.diagnostics.abr_compressed == b.diagnostics.abr_compressed);
+  };
+  const vcar::SegmentationResult all = r.select();
+  same(all, segment_with(f, held, p, renderer));
+  CHECK(all.diagnostics.overshoot_eroded >= 1);  // the dilated mask
+  std::size_t first = 0;
+  for (vcar::Index i : all.indices) first += i < 1500;
+  CHECK(first > 1200);
+  CHECK(all.indices.size() - first < 50);
+  // Edits: a mask cleared, one replaced, the dilated one restored; another reference view.
+  r.set_mask(7, nullptr);
+  held[7] = nullptr;
+  r.set_mask(2, &f.masks[2]);
+  held[2] = &f.masks[2];
+  r.set_mask(4, &f.masks[3]);
+  held[4] = &f.masks[3];
+  same(r.select(), segment_with(f, held, p, renderer));
+  CHECK(r.last_stats().abr_incremental);  // 3 of 9 views changed: ABR carried its state
+  CHECK(r.masks() == 9);
+  // The default preset is VcarParams::robust(): the same as passing it.
+  vcar::Reselection d(f.scene, f.cams, renderer);
+  vcar::Reselection e(f.scene, f.cams, renderer, vcar::VcarParams::robust());
+  for (std::size_t j = 0; j < f.cams.size(); ++j) d.set_mask(j, held[j]), e.set_mask(j, held[j]);
+  CHECK(d.select().indices == e.select().indices);
 }

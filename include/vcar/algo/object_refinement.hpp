@@ -82,6 +82,35 @@ inline LogScales refine_boundaries(const GaussianScene& scene, const std::vector
   return std::move(a.log_scale);
 }
 
+// Eq. R10 on the selection (scores aligned with it), from the coarse round's occlusion test over
+// the whole scene (coarse_seen: V^o per scene Gaussian; empty: nothing to do): hidden candidates
+// on a seen background plane dropped. False (diag.note says why) when it drops every one.
+inline bool drop_coplanar_background(const GaussianScene& scene, std::vector<Index>& selected,
+                                     std::vector<float>& scores, std::span<const std::uint16_t> coarse_seen,
+                                     const VcarParams& params, Diagnostics& diag) {
+  if (!(params.coplanar_radius > 0.f) || coarse_seen.empty()) return true;
+  const auto tc = Clock::now();
+  const CoplanarParams cp{params.coplanar_radius, params.coplanar_angle_deg, params.coplanar_slab};
+  const std::vector<std::size_t> drop =
+      coplanar_background(scene, selected, [&](Index i) { return coarse_seen[i] > 0; }, cp);  // Eq. R10
+  std::size_t w = 0;
+  for (std::size_t k = 0, d = 0; k < selected.size(); ++k) {
+    if (d < drop.size() && drop[d] == k) { ++d; continue; }
+    selected[w] = selected[k];
+    scores[w++] = scores[k];
+  }
+  selected.resize(w);
+  scores.resize(w);
+  diag.coplanar_dropped = drop.size();
+  diag.n_final = selected.size();
+  diag.timings_s.emplace_back("coplanar", seconds_since(tc));
+  if (selected.empty()) {
+    diag.note = "Eq. R10 dropped every candidate (hidden on a background plane); set coplanar_radius=0";
+    return false;
+  }
+  return true;
+}
+
 // Stages 2 and 3 of vcar::segment for one object, from its coarse selection `selected`
 // (scores: its R_i): sphere (Eq. 4-5), view completeness (Eq. 6), SSS and the fine round
 // (Eq. 7-8), ABR (Eq. 9-14). In steps, so that several objects can share one segmenter call
@@ -191,27 +220,7 @@ public:
     // coarse round's occlusion test over the whole scene (coarse_seen: V^o per scene Gaussian).
     // Not after a split fine vote (Eq. R7): masks that undershoot label the object's own seen
     // rim background, and R10 would carry that label into the hidden part of its planes.
-    if (params_.coplanar_radius > 0.f && !coarse_seen.empty() && !verdict_.split) {
-      const auto tc = Clock::now();
-      const CoplanarParams cp{params_.coplanar_radius, params_.coplanar_angle_deg, params_.coplanar_slab};
-      const std::vector<std::size_t> drop =
-          coplanar_background(scene_, selected_, [&](Index i) { return coarse_seen[i] > 0; }, cp);  // Eq. R10
-      std::size_t w = 0;
-      for (std::size_t k = 0, d = 0; k < selected_.size(); ++k) {
-        if (d < drop.size() && drop[d] == k) { ++d; continue; }
-        selected_[w] = selected_[k];
-        scores_[w++] = scores_[k];
-      }
-      selected_.resize(w);
-      scores_.resize(w);
-      diag_.coplanar_dropped = drop.size();
-      diag_.n_final = selected_.size();
-      timing("coplanar", seconds_since(tc));
-      if (selected_.empty()) {
-        diag_.note = "Eq. R10 dropped every candidate (hidden on a background plane); set coplanar_radius=0";
-        return false;
-      }
-    }
+    if (!verdict_.split && !drop_coplanar_background(scene_, selected_, scores_, coarse_seen, params_, diag_)) return false;
 
     // ---- Stage 3: ABR on the training views with masks from the latest round (Eq. 9-14, B).
     if (params_.enable_abr) stage(progress, t_start, "abr");

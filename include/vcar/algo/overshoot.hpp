@@ -17,7 +17,13 @@
 // such edge pixel, positive when it lies inside the mask,
 //   s(c) = d(c, E_j in M_j)        if d(c, E_j in M_j) <= d(c, E_j outside M_j)
 //        = -d(c, E_j outside M_j)  otherwise                                       (Eq. R11b)
-//   o_j  = median over c of s(c)
+//   o_j  = median of s(c) over the contour pixels c with |s(c)| <= r r_M
+// (r = overshoot_reach, r_M = sqrt(|M_j| / pi) the mask's radius; r = 0: every contour pixel).
+// Where the object touches a neighbour at its own depth (a contact: donuts side by side) the
+// render has no occlusion edge along the contour, and the nearest edge, far along it (the
+// object's own rim, or the neighbour's), reads as an overshoot or undershoot the mask does not
+// have; those pixels are left out. Nine trained donuts 1 cm apart, exact masks: without the
+// reach, R11 eroded the centre donut's masks (3D recall 0.81; with r = 0.5, 0.99).
 // (Euclidean distances between pixel centres). A mask on the object's true edge gives o_j < 0:
 // the render's edge lies outside the true silhouette by the splats' own extent, measured 1-5 px
 // at 160 x 120 and 7-10 px at 640 x 480 (median over a round's views); a mask eroded by e px
@@ -96,9 +102,17 @@ inline std::vector<std::uint8_t> occlusion_edges(const ImageF& alpha, const Imag
   return e;
 }
 
+// Eq. R11b's reach in px for a mask of `foreground` pixels: r sqrt(|M| / pi); r = 0: unlimited.
+inline double overshoot_reach_px(std::size_t foreground, double r) {
+  if (!(r > 0.0)) return std::numeric_limits<double>::infinity();
+  return r * std::sqrt(static_cast<double>(foreground) / 3.14159265358979323846);
+}
+
 // Eq. R11b: the overshoot o_j of mask m (px; > 0: its contour lies outside the render's
-// occlusion edges `edge`, Eq. R11a). 0 when the mask has no contour or the render no occlusion edge.
-inline double overshoot_px(const Mask& m, const std::vector<std::uint8_t>& edge) {
+// occlusion edges `edge`, Eq. R11a), read on the contour pixels with an edge within `reach` px.
+// 0 when no contour pixel has one (no contour, no edge, or none near).
+inline double overshoot_px(const Mask& m, const std::vector<std::uint8_t>& edge,
+                           double reach = std::numeric_limits<double>::infinity()) {
   const int W = m.width, H = m.height;
   std::vector<std::uint8_t> in(edge.size()), out(edge.size());
   for (std::size_t q = 0; q < edge.size(); ++q) {
@@ -107,7 +121,8 @@ inline double overshoot_px(const Mask& m, const std::vector<std::uint8_t>& edge)
   }
   const std::vector<double> d_in = squared_distance_to(in, W, H), d_out = squared_distance_to(out, W, H);
   return contour_median(m, [&](std::size_t q) {  // s(c); no edge pixel at all: no value
-    if (!(std::isfinite(d_in[q]) || std::isfinite(d_out[q]))) return std::numeric_limits<double>::quiet_NaN();
+    const double d2 = std::min(d_in[q], d_out[q]);
+    if (!std::isfinite(d2) || !(d2 <= reach * reach)) return std::numeric_limits<double>::quiet_NaN();
     return d_in[q] <= d_out[q] ? std::sqrt(d_in[q]) : -std::sqrt(d_out[q]);
   });
 }

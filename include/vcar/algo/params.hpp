@@ -119,6 +119,11 @@ struct VcarParams {
   // mask; overshoot_min 0 = off.
   float overshoot_min = 0.f;
   float overshoot_margin = 1.5f;
+  // Eq. R11b (and R12, which reads its o_j): a contour pixel counts only when an occlusion edge
+  // lies within overshoot_reach r_M of it, r_M = sqrt(|M| / pi) the mask's radius; 0 = every
+  // contour pixel. Where the object touches a neighbour at its own depth the render has no
+  // edge, and the nearest one, far along the contour, is no evidence of where the mask ends.
+  float overshoot_reach = 0.f;
   // Eq. R12: a coarse-round mask that R11 does not erode (o_j < overshoot_min) grows by the
   // covered, depth-continuous pixels between its contour and the render's occlusion edges, by
   // at most min(-o_j + grow_margin px, grow_max |image diagonal|, the mask's radius
@@ -163,7 +168,8 @@ struct VcarParams {
   // strict threshold 0.85 when the fine vote is decisive (R7), ABR on masks widened by their
   // undershoot when it is split, on their own footprints (R8), hidden candidates on a seen
   // background plane dropped (R10), masks that reach 1 px or more past the render's occlusion
-  // edges eroded (R11), masks that stop short of them grown to them (R12), and each view
+  // edges eroded (R11; contour pixels farther than half the mask's radius from any such edge,
+  // contacts at the object's own depth, not read), masks that stop short of them grown to them (R12), and each view
   // weighted by how its mask agrees with the round's consensus (R13). What vcar::segment uses
   // when given no parameters. Chosen on the field's tuning seed and the synthetic suite
   // (docs/notes/default-2026-12-02.md): fine threshold 0.7 (0.5 let GrabCut's leaks through,
@@ -182,6 +188,7 @@ struct VcarParams {
     p.abr_undershoot = true;
     p.coplanar_radius = 0.75f;
     p.overshoot_min = 1.f;
+    p.overshoot_reach = 0.5f;
     p.grow_max = 0.1f;
     p.view_reliability = true;
     return p;
@@ -235,7 +242,7 @@ struct VcarParams {
     f("abr_undershoot", p.abr_undershoot);
     f("coplanar_radius", p.coplanar_radius); f("coplanar_angle_deg", p.coplanar_angle_deg);
     f("coplanar_slab", p.coplanar_slab); f("overshoot_min", p.overshoot_min);
-    f("overshoot_margin", p.overshoot_margin);
+    f("overshoot_margin", p.overshoot_margin); f("overshoot_reach", p.overshoot_reach);
     f("grow_max", p.grow_max); f("grow_margin", p.grow_margin);
     f("view_reliability", p.view_reliability);
   }
@@ -289,6 +296,8 @@ struct VcarParams {
       bad("overshoot_min", "must be in [0, 100] px (0 = off), got " + std::to_string(overshoot_min));
     if (!(overshoot_margin >= 0.f && overshoot_margin <= 100.f))
       bad("overshoot_margin", "must be in [0, 100] px, got " + std::to_string(overshoot_margin));
+    if (!(overshoot_reach >= 0.f && overshoot_reach <= 10.f))
+      bad("overshoot_reach", "must be in [0, 10] mask radii (0 = unlimited), got " + std::to_string(overshoot_reach));
     unit("grow_max", grow_max);
     if (!(grow_margin >= 0.f && grow_margin <= 100.f))
       bad("grow_margin", "must be in [0, 100] px, got " + std::to_string(grow_margin));

@@ -17,10 +17,16 @@
 //
 // State: the voter (Morton-sorted means and counters, ~20 bytes per Gaussian), the masks
 // run-length encoded (O(boundary) bytes each) and the last refinement (~90 bytes per selected
-// Gaussian). The vote is the paper's (Eq. 1-3): the robust vote's parameters (VcarParams::
-// robust_vote(): the occlusion tests R3, foreshortening R5, the undershoot band R6, view
-// reliability R13) are refused: they need renders, and their levels are not taken back view by
-// view.
+// Gaussian).
+//
+// The default preset (VcarParams::robust(), as vcar::segment) reads renders: the occlusion test
+// (Eq. R3) and the mask edits (Eq. R11, R12) need each training view's alpha and depth over the
+// whole scene, and Eq. R10 the occlusion test's counts. Given a renderer, the constructor renders
+// every training view once and keeps its alpha and depth (8 bytes per pixel per view); a mask is
+// edited (Eq. R11, R12) when it is set, and select() votes every view again (the robust vote's
+// levels and view weights, Eq. R2, R13, are not taken back view by view), then Eq. R10 and the
+// incremental ABR. The paper presets (Eq. 1-3) need no renderer and vote incrementally.
+#include <algorithm>
 #include <cstddef>
 #include <memory>
 #include <optional>
@@ -31,6 +37,7 @@
 #include "vcar/algo/abr_state.hpp"
 #include "vcar/algo/boundary_refinement.hpp"
 #include "vcar/algo/incremental_refinement.hpp"
+#include "vcar/algo/object_refinement.hpp"
 #include "vcar/algo/pipeline.hpp"
 
 namespace vcar {
@@ -46,29 +53,37 @@ struct ReselectionStats {
 
 class Reselection {
 public:
-  // The scene is referenced (it must outlive this object); cameras and params are copied.
-  Reselection(const GaussianScene& scene, std::vector<Camera> cameras, VcarParams params = VcarParams::nvos())
-      : scene_(&scene), cameras_(std::move(cameras)), params_(params), vote_(scene), masks_(cameras_.size()),
-        abr_masks_(cameras_.size()) {
-    params_.validate();
-    if (params_.robust_vote())
-      throw Error("re-selection votes with Eq. 1-3 only; the robust vote (coarse_occlusion, fine_occlusion, "
-                  "foreshortening, undershoot_band, view_reliability) needs renders and is not incremental (use a "
-                  "paper preset such as VcarParams::nvos(), or vcar::segment)", "Reselection");
-    if (params_.occlusion_aware) throw Error("occlusion_aware needs renders (use vcar::segment)", "Reselection");
-    if (scene.empty()) throw Error("the scene has no Gaussians", "scene");
-    if (cameras_.empty()) throw Error("no training cameras", "cameras");
-    if (cameras_.size() >= 65535) throw Error("more than 65534 views", "Reselection");
-    for (const Camera& c : cameras_) c.validate();
+  // The scene is referenced (it must outlive this object); cameras and params are copied. The
+  // renderer is used here only: every training view rendered once (alpha and depth) when the
+  // preset reads renders (VcarParams::robust(), the default, does), none otherwise.
+  template <Renderer R>
+  Reselection(const GaussianScene& scene, std::vector<Camera> cameras, R& renderer,
+              VcarParams params = VcarParams::robust())
+      : Reselection(scene, std::move(cameras), params, true) {
+    if (!reads_renders()) return;
+    renders_.resize(cameras_.size());
+    for (std::size_t j = 0; j < cameras_.size(); ++j) {
+      RenderOutput r = detail::render_view(renderer, scene, cameras_[j], nullptr, params_.background, true);
+      if (r.depth.empty()) throw Error("the renderer returned no depth: the robust vote needs it", "view '" + cameras_[j].name + "'");
+      r.rgb = {};
+      renders_[j] = std::move(r);
+    }
   }
+  // Without a renderer: presets that vote with Eq. 1-3 only (VcarParams::nvos(), lerf(),
+  // reference_code()); a preset that reads renders (robust()) throws vcar::Error.
+  Reselection(const GaussianScene& scene, std::vector<Camera> cameras, VcarParams params)
+      : Reselection(scene, std::move(cameras), params, false) {}
 
   std::size_t views() const noexcept { return cameras_.size(); }
   // Views that currently have a mask.
-  std::size_t masks() const noexcept { return vote_.views(); }
+  std::size_t masks() const noexcept {
+    return static_cast<std::size_t>(std::count_if(masks_.begin(), masks_.end(), [](const MaskRef& m) { return m != nullptr; }));
+  }
 
   // Sets, replaces or (mask null) clears the mask of training view `view`. A mask at or below
-  // min_mask_fraction counts as none (conventions §7). Throws vcar::Error naming the view for an
-  // index out of range or a mask of another size.
+  // min_mask_fraction counts as none (conventions §7); with a robust preset the mask kept is the
+  // one Eq. R11, R12 make of it against the view's render (as vcar::segment votes it). Throws
+  // vcar::Error naming the view for an index out of range or a mask of another size.
   void set_mask(std::size_t view, const Mask* mask) {
     if (view >= cameras_.size())
       throw Error("view " + std::to_string(view) + " out of range (" + std::to_string(cameras_.size()) + " views)",
@@ -76,12 +91,24 @@ public:
     const Camera& cam = cameras_[view];
     detail::check_mask(mask, cam, "view '" + cam.name + "'");
     mask = detail::usable(mask, params_);
+    if (robust()) {
+      edits_[view] = detail::MaskEdit::none;
+      if (mask) {
+        Mask scratch;  // the coarse round's edits: Eq. R11 and R12
+        mask = detail::edit_mask(*mask, renders_[view], params_.overshoot_min > 0.f, params_.grow_max > 0.f, params_,
+                                 scratch, edits_[view]);
+        masks_[view] = std::make_shared<const RleMask>(RleMask::encode(*mask));
+      } else {
+        masks_[view].reset();
+      }
+      return;
+    }
     if (masks_[view]) {  // take back the old mask's votes
-      vote_.remove_view(cam, &decoder_.decode(*masks_[view]));
+      vote_->remove_view(cam, &decoder_.decode(*masks_[view]));
       masks_[view].reset();
     }
     if (!mask) return;
-    vote_.add_view(cam, mask);
+    vote_->add_view(cam, mask);
     masks_[view] = std::make_shared<const RleMask>(RleMask::encode(*mask));
   }
 
@@ -93,10 +120,22 @@ public:
     SegmentationResult result;
     Diagnostics& diag = result.diagnostics;
     diag.n_scene = scene_->size();
-    diag.masks_missing = cameras_.size() - vote_.views();
+    diag.masks_missing = cameras_.size() - masks();
     auto tv = detail::Clock::now();
     std::vector<Index> selected;
-    vote_.selected(params_.tau_coarse, selected, result.scores);  // Eq. 3
+    std::optional<detail::RoundVote> coarse;  // robust presets: the whole coarse round again
+    if (robust()) {
+      coarse.emplace(*scene_, nullptr, params_, false);
+      for (std::size_t j : detail::training_order(cameras_.size(), reference_view)) {
+        if (edits_[j] == detail::MaskEdit::eroded) coarse->count_overshoot_eroded();
+        if (edits_[j] == detail::MaskEdit::grown) coarse->count_grown();
+        if (masks_[j]) coarse->add_view(cameras_[j], &decoder_.decode(*masks_[j]), &renders_[j], params_.depth_tolerance);
+        else coarse->add_view(cameras_[j], nullptr, nullptr, params_.depth_tolerance);
+      }
+      detail::coarse_selection(*coarse, params_, diag, selected, result.scores);  // Eq. R2-R3, R13
+    } else {
+      vote_->selected(params_.tau_coarse, selected, result.scores);  // Eq. 3
+    }
     diag.timings_s.emplace_back("coarse_voting", detail::seconds_since(tv));
     diag.n_coarse = diag.n_fine = diag.n_final = selected.size();
     if (selected.empty()) {
@@ -109,6 +148,9 @@ public:
         diag.note = "the views leave a gap of " + std::to_string(gap.Delta_max_deg) +
                     " degrees: vcar::segment would add sampled views (SSS), re-selection does not";
     }
+    if (coarse && coarse->occlusion() &&
+        !detail::drop_coplanar_background(*scene_, selected, result.scores, coarse->unoccluded_views(), params_, diag))
+      return result;  // Eq. R10 dropped every candidate
     result.log_scale = refine(selected, diag);
     result.indices = std::move(selected);
     diag.timings_s.emplace_back("total", detail::seconds_since(t0));
@@ -122,6 +164,30 @@ public:
 
 private:
   using MaskRef = std::shared_ptr<const RleMask>;
+
+  Reselection(const GaussianScene& scene, std::vector<Camera> cameras, VcarParams params, bool renderer)
+      : scene_(&scene), cameras_(std::move(cameras)), params_(params), masks_(cameras_.size()),
+        abr_masks_(cameras_.size()), edits_(cameras_.size(), detail::MaskEdit::none) {
+    params_.validate();
+    if (!renderer && reads_renders())
+      throw Error("this preset reads renders (the occlusion test, Eq. R3, R10-R12, or the robust vote's levels): "
+                  "construct with a renderer, Reselection(scene, cameras, renderer, params), or use a paper preset "
+                  "such as VcarParams::nvos()", "Reselection");
+    if (params_.occlusion_aware) throw Error("occlusion_aware needs the fine round's renders (use vcar::segment)", "Reselection");
+    if (scene.empty()) throw Error("the scene has no Gaussians", "scene");
+    if (cameras_.empty()) throw Error("no training cameras", "cameras");
+    if (cameras_.size() >= 65535) throw Error("more than 65534 views", "Reselection");
+    for (const Camera& c : cameras_) c.validate();
+    if (!reads_renders()) vote_.emplace(scene);
+  }
+  // The coarse round of this preset reads renders or votes with the robust vote (which needs
+  // them for all but Eq. R2 and R13; they are cheap next to a segmenter, so any robust vote
+  // takes the renderer path).
+  bool reads_renders() const {
+    return params_.robust_vote() || params_.overshoot_min > 0.f || params_.grow_max > 0.f || params_.coplanar_radius > 0.f;
+  }
+  bool robust() const { return !renders_.empty(); }
+
 
   // ABR (Eq. 9-14) of `selected` on the views with masks, from the previous refinement when
   // few views changed (see the top of this file). Fills diag like detail::refine_boundaries.
@@ -171,10 +237,12 @@ private:
   const GaussianScene* scene_;
   std::vector<Camera> cameras_;
   VcarParams params_;
-  VisibilityVoting vote_;
+  std::optional<VisibilityVoting> vote_;  // paper presets: the incremental vote (Eq. 1-3)
   std::vector<MaskRef> masks_;      // the masks set, run-length encoded (shared, never changed)
   std::vector<MaskRef> abr_masks_;  // the masks that abr_ saw
   std::optional<AbrState> abr_;  // the latest select()'s refinement (either driver's state)
+  std::vector<RenderOutput> renders_;        // robust presets: each training view's render (alpha, depth)
+  std::vector<detail::MaskEdit> edits_;      // robust presets: Eq. R11, R12 on each view's mask
   ReselectionStats stats_;
   bool incremental_abr_ = true;
   MaskDecoder decoder_;

@@ -1,6 +1,7 @@
 #pragma once
 // The vote of one round (Eq. 1-3, or the robust vote of docs/robust.md) and the vote of one
 // view with its mask edits (Eq. R11, R12).
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -121,13 +122,43 @@ private:
   std::optional<RobustVoting> robust_;
 };
 
+// Eq. R11 and R12 on one view's mask m, from the view's render (alpha and depth): the mask
+// voted, m or the edited copy in `scratch`. With `overshoot` (Eq. R11) a mask that overshoots the
+// render's occlusion edges is eroded (an erosion that would take more than three quarters of the
+// mask's foreground is not applied: structures thinner than the erosion, or a mask of scattered
+// specks, are not what a dilated object looks like); with `grow` (Eq. R12, the coarse round) one
+// that stops short of them is grown to them. `edit` says which happened.
+enum class MaskEdit { none, eroded, grown };
+inline const Mask* edit_mask(const Mask& m, const RenderOutput& render, bool overshoot, bool grow,
+                             const VcarParams& params, Mask& scratch, MaskEdit& edit) {
+  edit = MaskEdit::none;
+  if (!(overshoot || grow) || render.depth.empty()) return &m;
+  auto foreground = [](const Mask& x) {
+    return static_cast<std::size_t>(std::count_if(x.data.begin(), x.data.end(), [](std::uint8_t v) { return v != 0; }));
+  };
+  const std::vector<std::uint8_t> edges = occlusion_edges(render.alpha, render.depth, params.depth_tolerance);  // Eq. R11a
+  const double o = overshoot_px(m, edges, overshoot_reach_px(foreground(m), params.overshoot_reach));  // Eq. R11b
+  if (overshoot && o >= static_cast<double>(params.overshoot_min)) {
+    scratch = m;
+    erode_by_overshoot(scratch, o + static_cast<double>(params.overshoot_margin));  // Eq. R11c
+    if (4 * foreground(scratch) < foreground(m)) return &m;  // thin or scattered masks are kept as they are
+    edit = MaskEdit::eroded;
+    return &scratch;
+  }
+  if (grow && o < static_cast<double>(params.overshoot_min)) {
+    const int reach_px = growth_reach(o, foreground(m), m.width, m.height, params.grow_max, params.grow_margin);  // Eq. R12c
+    scratch = m;
+    if (grow_to_occlusion_edges(scratch, edges, render.alpha, render.depth, params.depth_tolerance, reach_px) > 0) {
+      edit = MaskEdit::grown;  // Eq. R12b
+      return &scratch;
+    }
+  }
+  return &m;
+}
+
 // One vote of one view. With the occlusion test (or Eq. R11, R12) the view's expected depth comes
 // from `render` when the round kept it, else it is rendered from the same Gaussians the
-// segmenter saw. With Eq. R11 a mask that overshoots the render's occlusion edges is voted
-// eroded (a copy in `scratch`; an erosion that would take more than three quarters of the
-// mask's foreground is not applied: structures thinner than the erosion, or a mask of scattered
-// specks, are not what a dilated object looks like); with Eq. R12 (coarse round) one that stops
-// short of them is voted grown to them.
+// segmenter saw; the mask is edited by Eq. R11, R12 (edit_mask) and the edits counted.
 // Returns the mask voted (m, &scratch or null): the one the caller keeps for ABR.
 template <Renderer R>
 const Mask* vote(RoundVote& voting, const Camera& cam, const Mask* m, const RenderOutput* render,
@@ -144,28 +175,10 @@ const Mask* vote(RoundVote& voting, const Camera& cam, const Mask* m, const Rend
   }
   if (render->depth.empty() && voting.occlusion())
     throw Error("the occlusion test needs a renderer that returns depth", "view '" + cam.name + "'");
-  if ((voting.overshoot() || voting.grow()) && !render->depth.empty()) {
-    auto foreground = [](const Mask& x) {
-      return static_cast<std::size_t>(std::count_if(x.data.begin(), x.data.end(), [](std::uint8_t v) { return v != 0; }));
-    };
-    const std::vector<std::uint8_t> edges = occlusion_edges(render->alpha, render->depth, params.depth_tolerance);  // Eq. R11a
-    const double o = overshoot_px(*m, edges);  // Eq. R11b
-    if (voting.overshoot() && o >= static_cast<double>(params.overshoot_min)) {
-      scratch = *m;
-      erode_by_overshoot(scratch, o + static_cast<double>(params.overshoot_margin));  // Eq. R11c
-      if (4 * foreground(scratch) >= foreground(*m)) {  // thin or scattered masks are kept as they are
-        m = &scratch;
-        voting.count_overshoot_eroded();
-      }
-    } else if (voting.grow() && o < static_cast<double>(params.overshoot_min)) {
-      const int reach = growth_reach(o, foreground(*m), m->width, m->height, params.grow_max, params.grow_margin);  // Eq. R12c
-      scratch = *m;
-      if (grow_to_occlusion_edges(scratch, edges, render->alpha, render->depth, params.depth_tolerance, reach) > 0) {
-        m = &scratch;  // Eq. R12b
-        voting.count_grown();
-      }
-    }
-  }
+  MaskEdit edit;
+  m = edit_mask(*m, *render, voting.overshoot(), voting.grow(), params, scratch, edit);
+  if (edit == MaskEdit::eroded) voting.count_overshoot_eroded();
+  if (edit == MaskEdit::grown) voting.count_grown();
   voting.add_view(cam, m, render, params.depth_tolerance);
   return m;
 }
