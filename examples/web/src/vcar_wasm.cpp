@@ -11,6 +11,7 @@
 //   s.objectIndices(k);                         // Uint32Array: object k of the latest segmentObjects
 //   s.render(cam);                              // {width, height, rgb, alpha, depth}: vcar's own render
 //   s.indices(); s.scores(); s.logScales();     // Uint32Array, Float32Array, Float32Array (3 x n)
+//   s.scenePly();                               // the whole scene as Inria PLY (the viewer's fallback)
 //   s.objectPly(); s.removedPly(); s.statePly();// Uint8Array (Inria PLY; state PLY for SuperSplat)
 //
 // A camera is {name, width, height, fx, fy, cx, cy, R: [9, world-to-camera, row-major], t: [3]}
@@ -77,7 +78,15 @@ public:
   val segment(const val& camera, float u, float v, const val& options, const val& progress) {
     const vcar::web::FrameMaskFn custom = frame_hook(options, val::null());
     const vcar::SegmentationResult& r = s_.segment(camera_from_js(camera), u, v, options_of(options), progress_of(progress), custom);
-    return diagnostics_of(r);
+    val d = diagnostics_of(r);
+    const vcar::web::TimingSplit split = vcar::web::timing_split(r.diagnostics);  // vcar::segment's seconds, three ways
+    val sp = val::object();
+    sp.set("renders", split.renders);
+    sp.set("segmenter", split.segmenter);
+    sp.set("vcar", split.vcar);
+    sp.set("total", split.total);
+    d.set("split", sp);
+    return d;
   }
   // Several objects in one run (vcar::segment_objects): prompts = [{click: [u, v] | null,
   // box: [x0, y0, x1, y1] | null, name}], each on `camera`. Returns one diagnostics object per
@@ -153,6 +162,7 @@ public:
   val objectPly() { return typed_copy(s_.object_ply()); }
   val removedPly() { return typed_copy(s_.removed_ply()); }
   val statePly() { return typed_copy(s_.state_ply()); }
+  val scenePly() { return typed_copy(s_.scene_ply()); }
 
 private:
   static bool is_object(const val& v) { return v.typeOf().as<std::string>() == "object" && !v.isNull(); }
@@ -287,7 +297,8 @@ EMSCRIPTEN_BINDINGS(vcar_web) {
       .function("views", &JsSession::views)
       .function("objectPly", &JsSession::objectPly)
       .function("removedPly", &JsSession::removedPly)
-      .function("statePly", &JsSession::statePly);
+      .function("statePly", &JsSession::statePly)
+      .function("scenePly", &JsSession::scenePly);
   emscripten::function("simdPath", &simd_path);
   emscripten::function("exceptionMessage", &exception_message);
 }

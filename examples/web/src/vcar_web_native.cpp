@@ -8,8 +8,9 @@
 // colour + depth region growing, as the page's fallback.
 //   vcar_web_native --convert IN OUT      (any scene format -> .ply / .splat / .spz by OUT's
 //                                          extension: inputs for the browser format tests)
-// Prints (and writes to --out) {"selected": n, "seconds": t, "indices": [...]}: the page's
-// #vcar-result format; seconds covers vcar::segment only, as in the page. With --objects (a click
+// Prints (and writes to --out) {"selected": n, "seconds": t, "indices": [...], "split": {...}}:
+// the page's #vcar-result format; seconds covers the Session's segment call (vcar::segment, the
+// prompt's lift, the views), split as web::timing_split says. With --objects (a click
 // per object, vcar::segment_objects as the page's objects=): {"objects": [{"selected": n,
 // "indices": [...]}, ...], "seconds": t}.
 #include <chrono>
@@ -133,9 +134,11 @@ int main(int argc, char** argv) {
     } else {
       const vcar::SegmentationResult& r = s.segment(ref, u, v, opt, {}, custom);
       const double secs = seconds();
+      const vcar::web::TimingSplit sp = vcar::web::timing_split(r.diagnostics);
       j << "{";
       indices_json(j, r.indices);
-      j << ", \"seconds\": " << secs << "}";
+      j << ", \"seconds\": " << secs << ", \"split\": {\"renders\": " << sp.renders << ", \"segmenter\": " << sp.segmenter
+        << ", \"vcar\": " << sp.vcar << ", \"total\": " << sp.total << "}}";
     }
     std::cout << j.str() << "\n";
     if (!out.empty()) std::ofstream(out) << j.str() << "\n";

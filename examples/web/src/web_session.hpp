@@ -89,6 +89,27 @@ struct HostSegmenter {
   }
 };
 
+// The seconds of one vcar::segment run (its diagnostics' timings) split three ways, for the
+// page's and the native twin's reports: `renders`, the frames rendered for the segmenter (the
+// coarse and fine rounds' "_render"); `segmenter`, the rest of those rounds but their votes (the
+// masks: GrabCut, the region grower or the host's hook, with the hand-over of each frame);
+// `vcar`, the rest of vcar::segment (votes with their visibility passes, sphere, view
+// completeness, SSS cameras, ABR); `total`, its "total". Caller-side work before vcar::segment
+// (the views, the prompt's lift, loading a segmenter) is in none of them.
+struct TimingSplit {
+  double renders = 0, segmenter = 0, vcar = 0, total = 0;
+};
+inline TimingSplit timing_split(const Diagnostics& d) {
+  TimingSplit s;
+  for (const auto& [stage, t] : d.timings_s) {
+    if (stage == "coarse_render" || stage == "fine_render") s.renders += t;
+    else if (stage == "coarse_segment" || stage == "fine_segment") s.segmenter += t;
+    else if (stage == "total") s.total = t;
+  }
+  s.vcar = s.total - s.renders - s.segmenter;
+  return s;
+}
+
 class Session {
 public:
   // `scratch`: a folder of its own (created, and removed with the session); by default a new
@@ -220,6 +241,11 @@ public:
     return *objects_;
   }
 
+  // The whole scene as Inria PLY bytes (for a viewer that cannot read the file it came in).
+  std::vector<std::uint8_t> scene_ply() {
+    require_scene();
+    return write_and_read([&](const auto& p) { io::write_ply(p, scene_); });
+  }
   // The selected Gaussians with their refined log-scales (ABR), as Inria PLY bytes.
   std::vector<std::uint8_t> object_ply() { return write_and_read([&](const auto& p) { io::write_ply(p, scene_, result().indices, &result().log_scale); }); }
   // Every Gaussian but the selection (the scene with the object deleted).

@@ -20,16 +20,10 @@
 // not empty, no Gaussian in two objects, each object's Jaccard with the native one >= --min-iou
 // (two empty selections agree: an object can lose all its Gaussians to an earlier one).
 // Prints one JSON line with the numbers (browser and native seconds of the same run).
-import http from 'node:http';
-import fs from 'node:fs';
 import path from 'node:path';
-import { execFileSync } from 'node:child_process';
-import { fileURLToPath } from 'node:url';
-import puppeteer from 'puppeteer-core';
+import { jaccard, launch, newPage, parseArgs, runNative as runTwin, serve, unattended } from './harness.mjs';
 
-const here = path.dirname(fileURLToPath(import.meta.url));
-const dist = path.resolve(here, '..', 'dist');
-const args = Object.fromEntries(process.argv.slice(2).reduce((a, v, i, all) => (v.startsWith('--') ? [...a, [v.slice(2), all[i + 1]]] : a), []));
+const args = parseArgs(process.argv.slice(2));
 const need = (k) => { if (!args[k]) { console.error(`missing --${k}`); process.exit(2); } return args[k]; };
 const scene = path.resolve(need('scene'));
 const click = need('click');
@@ -44,39 +38,23 @@ const maxSide = args['max-side'];  // the page's maxSide (URL) and the native --
 // A static server: dist/ at /, the inputs at /input/<name>.
 const inputs = { [path.basename(scene)]: scene };
 if (args.cameras) inputs[path.basename(args.cameras)] = path.resolve(args.cameras);
-const types = { '.html': 'text/html', '.js': 'text/javascript', '.css': 'text/css', '.json': 'application/json' };
-const server = http.createServer((req, res) => {
-  const url = decodeURIComponent(req.url.split('?')[0]);
-  const file = url.startsWith('/input/') ? inputs[url.slice(7)] : path.join(dist, path.normalize(url === '/' ? '/index.html' : url));
-  if (!file || (!url.startsWith('/input/') && !file.startsWith(dist)) || !fs.existsSync(file)) { res.writeHead(404); res.end(); return; }
-  res.writeHead(200, { 'Content-Type': types[path.extname(file)] ?? 'application/octet-stream' });
-  fs.createReadStream(file).pipe(res);
-});
-await new Promise((r) => server.listen(0, '127.0.0.1', r));
-const base = `http://127.0.0.1:${server.address().port}`;
+const server = await serve(inputs);
+const base = server.base;
 
 function fail(msg) { console.error('FAIL: ' + msg); process.exitCode = 1; }
 
 // The native twin on the same scene, cameras, view, segmenter and view size, with `prompt`
 // (['--click', 'u,v'] or ['--objects', 'u,v;u,v']): its JSON.
 function runNative(prompt) {
-  return JSON.parse(execFileSync(native, ['--scene', scene, ...prompt, '--segmenter', segmenter,
+  return runTwin(native, ['--scene', scene, ...prompt, '--segmenter', segmenter,
     ...(maxSide ? ['--max-side', String(maxSide)] : []),
-    ...(args.cameras ? ['--cameras', path.resolve(args.cameras)] : []), ...(args.view ? ['--view', args.view] : [])],
-    { encoding: 'utf8', stdio: ['ignore', 'pipe', 'inherit'] }));
+    ...(args.cameras ? ['--cameras', path.resolve(args.cameras)] : []), ...(args.view ? ['--view', args.view] : [])]);
 }
 
-const browser = await puppeteer.launch({
-  executablePath: chromium, headless: true,
-  args: ['--no-sandbox', '--enable-unsafe-swiftshader', '--use-angle=swiftshader', '--ignore-gpu-blocklist', '--window-size=1200,700'],
-  defaultViewport: { width: 1200, height: 700 },
-});
+const browser = await launch(chromium);
 const out = {};
 try {
-  const page = await browser.newPage();
-  const logs = [];
-  page.on('console', (m) => logs.push(m.text()));
-  page.on('pageerror', (e) => logs.push('pageerror: ' + e.message));
+  const page = await newPage(browser);
   let q = `scene=/input/${encodeURIComponent(path.basename(scene))}`;
   if (args.cameras) q += `&cameras=/input/${encodeURIComponent(path.basename(args.cameras))}`;
   if (args.view) q += `&view=${encodeURIComponent(args.view)}`;
@@ -90,10 +68,7 @@ try {
     await new Promise((r) => setTimeout(r, 4000));
     await page.screenshot({ path: path.join(shots, 'web_before.png') });
   }
-  await page.goto(`${base}/index.html?${q}${qSide}&click=${click}`);
-  await page.waitForFunction(() => document.getElementById('vcar-result').textContent.length > 0, { timeout: timeoutMs, polling: 500 });
-  const result = JSON.parse(await page.$eval('#vcar-result', (e) => e.textContent));
-  if (result.error) throw new Error('page: ' + result.error + '\n' + logs.join('\n'));
+  const result = await unattended(page, `${base}/index.html?${q}${qSide}&click=${click}`, timeoutMs);
   if (shots) {
     await new Promise((r) => setTimeout(r, 3000));
     await page.screenshot({ path: path.join(shots, 'web_after.png') });
@@ -120,10 +95,7 @@ try {
     await page.waitForFunction(() => /^selected|^error/.test(document.getElementById('status').textContent), { timeout: timeoutMs, polling: 500 });
     clicked = await page.evaluate(() => Array.from(window.vcarPage.selection() || []));
   }
-  const refSet = new Set(ref);
-  let both = 0;
-  for (const i of clicked) both += refSet.has(i);
-  const clickIou = both / (clicked.length + ref.length - both || 1);
+  const clickIou = jaccard(clicked, ref);
 
   // The PLY files the page offers for download (of the canvas click's selection).
   const header = async (kind) => page.evaluate(async (k) => {
@@ -144,15 +116,12 @@ try {
   const obj = await header('object'), rem = await header('removed'), st = await header('state');
 
   const nat = runNative(['--click', click]);
-  const a = new Set(result.indices), b = new Set(nat.indices);
-  let inter = 0;
-  for (const i of a) inter += b.has(i);
-  const iou = inter / (a.size + b.size - inter || 1);
+  const iou = jaccard(result.indices, nat.indices);
   const total = obj.n + rem.n;
   Object.assign(out, {
     scene: path.basename(scene), click, view: args.view ?? null, segmenter, gaussians: total,
-    browser_selected: result.selected, native_selected: nat.selected, identical: inter === a.size && a.size === b.size,
-    jaccard: Number(iou.toFixed(5)), browser_seconds: Number(result.seconds.toFixed(3)),
+    browser_selected: result.selected, native_selected: nat.selected, identical: iou === 1,
+    jaccard: Number(iou.toFixed(5)), browser_seconds: Number(result.seconds.toFixed(3)), browser_split: result.split,
     native_seconds: Number(nat.seconds.toFixed(3)), ratio: Number((result.seconds / nat.seconds).toFixed(2)),
     simd: result.simd, ply: { object: obj.n, removed: rem.n, state_n: st.n, state_selected: st.state },
     canvas_click: canvasClick ? { selected: clicked.length, jaccard_vs_unattended: Number(clickIou.toFixed(4)) } : null,
@@ -165,21 +134,14 @@ try {
   if (rem.n !== total - clicked.length || st.n !== total) fail(`removed.ply ${rem.n} / state PLY ${st.n} vertices for ${total}`);
   if (st.state !== clicked.length) fail(`state PLY marks ${st.state} selected, ${clicked.length} expected`);
   if (args.objects) {  // several objects: the page's objects= against the native twin's --objects
-    await page.goto(`${base}/index.html?${q}${qSide}&objects=${encodeURIComponent(args.objects)}`);
-    await page.waitForFunction(() => document.getElementById('vcar-result').textContent.length > 0, { timeout: timeoutMs, polling: 500 });
-    const multi = JSON.parse(await page.$eval('#vcar-result', (e) => e.textContent));
-    if (multi.error) throw new Error('page (objects): ' + multi.error + '\n' + logs.join('\n'));
+    const multi = await unattended(page, `${base}/index.html?${q}${qSide}&objects=${encodeURIComponent(args.objects)}`, timeoutMs);
     const natMulti = runNative(['--objects', args.objects]);
     const wanted = args.objects.split(';').length;
     const seen = new Set();
     let shared = 0;
     const jaccards = multi.objects.map((o, k) => {
       for (const i of o.indices) { shared += seen.has(i); seen.add(i); }
-      const n = new Set(natMulti.objects[k] ? natMulti.objects[k].indices : []);
-      let both = 0;
-      for (const i of o.indices) both += n.has(i);
-      const union = o.indices.length + n.size - both;
-      return union ? both / union : 1;  // both empty: the same (an object may lose all to another)
+      return jaccard(o.indices, natMulti.objects[k] ? natMulti.objects[k].indices : []);  // both empty: 1 (an object may lose all to another)
     });
     out.objects = { selected: multi.objects.map((o) => o.selected), jaccard: jaccards.map((x) => Number(x.toFixed(5))),
                     browser_seconds: Number(multi.seconds.toFixed(3)), native_seconds: Number(natMulti.seconds.toFixed(3)) };

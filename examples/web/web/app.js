@@ -3,8 +3,9 @@
 // Unattended contract (docs/web.md):
 // index.html?scene=URL&cameras=URL&view=NAME&click=u,v&box=x0,y0,x1,y1&segmenter=grabcut|region
 // (click, box or both) runs the whole flow and writes {"selected": n, "seconds": t, "indices":
-// [...]} into #vcar-result; objects=u,v;u,v;... (a click per object) runs vcar::segment_objects
-// and writes {"objects": [{"selected": n, "indices": [...]}, ...], "seconds": t}.
+// [...], "split": {...}} into #vcar-result; objects=u,v;u,v;... (a click per object) runs
+// vcar::segment_objects and writes {"objects": [{"selected": n, "indices": [...]}, ...], "seconds": t};
+// without a prompt, once the scene is loaded and shown: {"gaussians": n, "format", "viewer": "ok" | why not}.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { SparkRenderer, SplatMesh } from '@sparkjsdev/spark';
@@ -146,10 +147,19 @@ async function loadScene(bytes, name) {
   const viewerCopy = bytes.slice();
   const r = await call({ type: 'scene', bytes: bytes.buffer, name }, [bytes.buffer]);
   status(`${r.n.toLocaleString()} Gaussians (${r.format})`);
-  try { await showScene(viewerCopy, name); } catch (e) { status('viewer: ' + e.message); }
+  let viewer = 'ok';  // or how Spark showed it, or why it could not
+  try { await showScene(viewerCopy, name); } catch (e) {
+    // A file Spark does not read (SPZ v4: Spark 2.2 expects gzip) but vcar does: the viewer gets
+    // vcar's PLY of the scene (same Gaussians, same order).
+    const why = String(e?.message ?? e);
+    try {
+      await showScene(new Uint8Array((await call({ type: 'ply', kind: 'scene' })).bytes), 'scene.ply');
+      viewer = `ok, as vcar's PLY (Spark: ${why})`;
+    } catch (e2) { viewer = why; status('viewer: ' + why); }
+  }
   selection = null;
   enableResultButtons(false);
-  return r;
+  return { ...r, viewer };
 }
 async function loadCameras(bytes, name) {
   const r = await call({ type: 'cameras', bytes: bytes ? bytes.buffer : null, name }, bytes ? [bytes.buffer] : []);
@@ -285,7 +295,7 @@ canvas.addEventListener('pointerup', async (e) => {
 });
 
 // For tests and scripting: the worker protocol (docs/web.md) and the current selection.
-window.vcarPage = { call, display, segmentObjects, selection: () => selection };
+window.vcarPage = { call, display, segment, segmentObjects, selection: () => selection };
 
 let simdPath = '';
 async function unattended() {
@@ -296,7 +306,7 @@ async function unattended() {
     return new Uint8Array(await r.arrayBuffer());
   };
   const sceneUrl = params.get('scene');
-  await loadScene(await fetchBytes(sceneUrl), sceneUrl.split('/').pop().split('?')[0]);
+  const loaded = await loadScene(await fetchBytes(sceneUrl), sceneUrl.split('/').pop().split('?')[0]);
   if (params.get('cameras')) {
     const u = params.get('cameras');
     await loadCameras(await fetchBytes(u), u.split('/').pop().split('?')[0]);
@@ -317,7 +327,11 @@ async function unattended() {
     });
     return;
   }
-  if (!click && !box) return;
+  if (!click && !box) {  // no prompt: what was loaded
+    $('vcar-result').textContent = JSON.stringify({ gaussians: loaded.n, format: loaded.format, viewer: loaded.viewer,
+                                                    page_seconds: (performance.now() - t0) / 1000 });
+    return;
+  }
   const [u, v] = click ? click.split(',').map(Number) : [NaN, NaN];
   const opts = {};
   if (box) opts.box = box.split(',').map(Number);
@@ -327,6 +341,7 @@ async function unattended() {
   await new Promise((res) => requestAnimationFrame(() => requestAnimationFrame(res)));  // the highlight is drawn
   $('vcar-result').textContent = JSON.stringify({
     selected: r.indices.length, seconds: r.seconds, indices: Array.from(r.indices),
+    split: { ...r.diagnostics.split, load_segmenter: r.loadSeconds },
     simd: simdPath, page_seconds: (performance.now() - t0) / 1000,
   });
 }

@@ -3,14 +3,17 @@
 //
 // Messages in:  {type: 'scene', bytes, name} | {type: 'cameras', bytes, name} | {type: 'view', name}
 //               {type: 'default-view', width, height}
-//               {type: 'segment', camera, u, v, options} | {type: 'ply', kind: 'object'|'removed'|'state'}
+//               {type: 'segment', camera, u, v, options} | {type: 'ply', kind: 'object'|'removed'|'state'|'scene'}
 //               {type: 'segment-objects', camera, prompts: [{click: [u, v] | null, box: [...] | null}], options}
 //               (options: {segmenterName: 'grabcut' | 'region', box: [x0, y0, x1, y1], maxSide, ...};
 //               u, v NaN: no click, the box alone)
 // Messages out: {type: 'ready', simd} | {type: 'progress', stage, view, views, elapsed}
 //               {type: 'scene', n, format} | {type: 'cameras', names} | {type: 'view', camera}
-//               {type: 'result', indices, scores, logScales, diagnostics, seconds}
-//               {type: 'objects', objects: [{indices, diagnostics}], seconds}  (one per prompt)
+//               {type: 'result', indices, scores, logScales, diagnostics, seconds, loadSeconds}
+//               {type: 'objects', objects: [{indices, diagnostics}], seconds, loadSeconds}  (one per prompt)
+//               (seconds: the request, click to selection; loadSeconds: loading OpenCV, its first
+//               GrabCut request only; diagnostics.split: vcar::segment's seconds as renders,
+//               segmenter and vcar, web_session.hpp timing_split)
 //               {type: 'ply', kind, bytes} | {type: 'error', message, request}
 importScripts('vcar.js', 'vendor/fzstd/fzstd.js');  // fzstd: SPZ v4's zstd streams (self.fzstd)
 
@@ -94,8 +97,10 @@ onmessage = async (ev) => {
       delete options.segmenterName;
       let seg = hostSegmenter(options);
       delete options.segmenterScript;
+      let loadSeconds = 0;  // loading OpenCV (the first GrabCut request only): part of `seconds`
       if (!seg && name === 'grabcut') {
         const { cv } = await loadOpenCV();
+        loadSeconds = (performance.now() - t0) / 1000;
         seg = (frame) => self.vcarGrabCut(cv, frame);
       } else if (!seg && name !== 'region') {
         throw new Error(`unknown segmenter '${name}' (grabcut or region)`);
@@ -109,16 +114,17 @@ onmessage = async (ev) => {
         const diagnostics = session.segmentObjects(q.camera, q.prompts, options, progress);
         const objects = diagnostics.map((d, k) => ({ indices: session.objectIndices(k), diagnostics: d }));
         const seconds = (performance.now() - t0) / 1000;
-        postMessage({ type: 'objects', objects, seconds }, objects.map((o) => o.indices.buffer));
+        postMessage({ type: 'objects', objects, seconds, loadSeconds }, objects.map((o) => o.indices.buffer));
         return;
       }
       const diagnostics = session.segment(q.camera, q.u, q.v, options, progress);
       const seconds = (performance.now() - t0) / 1000;
       const indices = session.indices(), scores = session.scores(), logScales = session.logScales();
-      postMessage({ type: 'result', indices, scores, logScales, diagnostics, seconds },
+      postMessage({ type: 'result', indices, scores, logScales, diagnostics, seconds, loadSeconds },
                   [indices.buffer, scores.buffer, logScales.buffer]);
     } else if (q.type === 'ply') {
-      const bytes = q.kind === 'object' ? session.objectPly() : q.kind === 'removed' ? session.removedPly() : session.statePly();
+      const bytes = q.kind === 'object' ? session.objectPly() : q.kind === 'removed' ? session.removedPly()
+        : q.kind === 'scene' ? session.scenePly() : session.statePly();
       postMessage({ type: 'ply', kind: q.kind, bytes }, [bytes.buffer]);
     }
   } catch (e) {
