@@ -82,7 +82,7 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
   CHECK(r.abr_lowpass);  // as the paper; R8 reads own footprints after a split vote
   CHECK(r.abr_undershoot);  // R8
   CHECK(r.overshoot_min > 0.f);      // R11
-  CHECK(r.overshoot_reach == 0.5f);  // R11b: contacts at the object's depth not read
+  CHECK(r.overshoot_reach == 0.f);   // R11b's reach: measured, not adopted (docs/robust.md)
   CHECK(r.grow_max > 0.f);           // R12
   CHECK(r.kappa == 2.f);
   CHECK(r.robust_vote());

@@ -22,8 +22,10 @@
 // Where the object touches a neighbour at its own depth (a contact: donuts side by side) the
 // render has no occlusion edge along the contour, and the nearest edge, far along it (the
 // object's own rim, or the neighbour's), reads as an overshoot or undershoot the mask does not
-// have; those pixels are left out. Nine trained donuts 1 cm apart, exact masks: without the
-// reach, R11 eroded the centre donut's masks (3D recall 0.81; with r = 0.5, 0.99).
+// have; those pixels are left out. Off in every preset (r = 0): with r = 0.5 nine trained
+// donuts 1 cm apart keep their exact masks (3D recall 0.81 -> 0.99), but a GrabCut box on a
+// donut seen 40 px wide loses its recall (0.997 -> 0.586): the contour pixels where the mask
+// stops short, far inside the render's edge, are left out too (docs/notes/default-2026-12-02.md).
 // (Euclidean distances between pixel centres). A mask on the object's true edge gives o_j < 0:
 // the render's edge lies outside the true silhouette by the splats' own extent, measured 1-5 px
 // at 160 x 120 and 7-10 px at 640 x 480 (median over a round's views); a mask eroded by e px

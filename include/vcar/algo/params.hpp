@@ -123,6 +123,7 @@ struct VcarParams {
   // lies within overshoot_reach r_M of it, r_M = sqrt(|M| / pi) the mask's radius; 0 = every
   // contour pixel. Where the object touches a neighbour at its own depth the render has no
   // edge, and the nearest one, far along the contour, is no evidence of where the mask ends.
+  // Off in every preset (measured, not adopted: docs/notes/default-2026-12-02.md).
   float overshoot_reach = 0.f;
   // Eq. R12: a coarse-round mask that R11 does not erode (o_j < overshoot_min) grows by the
   // covered, depth-continuous pixels between its contour and the render's occlusion edges, by
@@ -168,8 +169,7 @@ struct VcarParams {
   // strict threshold 0.85 when the fine vote is decisive (R7), ABR on masks widened by their
   // undershoot when it is split, on their own footprints (R8), hidden candidates on a seen
   // background plane dropped (R10), masks that reach 1 px or more past the render's occlusion
-  // edges eroded (R11; contour pixels farther than half the mask's radius from any such edge,
-  // contacts at the object's own depth, not read), masks that stop short of them grown to them (R12), and each view
+  // edges eroded (R11), masks that stop short of them grown to them (R12), and each view
   // weighted by how its mask agrees with the round's consensus (R13). What vcar::segment uses
   // when given no parameters. Chosen on the field's tuning seed and the synthetic suite
   // (docs/notes/default-2026-12-02.md): fine threshold 0.7 (0.5 let GrabCut's leaks through,
@@ -188,7 +188,6 @@ struct VcarParams {
     p.abr_undershoot = true;
     p.coplanar_radius = 0.75f;
     p.overshoot_min = 1.f;
-    p.overshoot_reach = 0.5f;
     p.grow_max = 0.1f;
     p.view_reliability = true;
     return p;
