@@ -7,15 +7,20 @@ import pytest
 import vcar
 
 
+def segment_with_masks(scene, cams, params, held):
+    """vcar.segment with held[k] as training view k's mask (reference view 0: frame k is view k)."""
+    def segmenter(request):
+        return [held[k] for k in range(len(request.cameras))]
+    return vcar.segment(scene, cams, {"reference_view": 0}, segmenter, params=params)
+
+
 def test_reselection_follows_edits_like_segment(world, rig):
     cams = rig.train
     masks = [world.visible_mask(c) for c in cams]
     params = ("nvos", {"enable_sss": False})
 
     def segment_with(held):
-        def segmenter(request):  # reference view 0: frame k is training view k
-            return [held[k] for k in range(len(request.cameras))]
-        return vcar.segment(world.scene, cams, {"reference_view": 0}, segmenter, params=params)
+        return segment_with_masks(world.scene, cams, params, held)
 
     session = vcar.Reselection(world.scene, cams, params)
     assert session.views == len(cams) and session.masks == 0
@@ -52,9 +57,7 @@ def test_reselection_default_preset_equals_segment(world, rig):
     params = ("robust", {"enable_sss": False})
 
     def segment_with(masks):
-        def segmenter(request):
-            return [masks[k] for k in range(len(request.cameras))]
-        return vcar.segment(world.scene, cams, {"reference_view": 0}, segmenter, params=params)
+        return segment_with_masks(world.scene, cams, params, masks)
 
     session = vcar.Reselection(world.scene, cams, params)
     for k, m in enumerate(held):
