@@ -135,9 +135,9 @@ using evidence::is_360;
 using evidence::kPeers;
 const std::vector<std::string> kVariants = {"coarse", "sss", "abr", "full", "occlusion", "gapdir", "robust"};
 // The robust preset with one mechanism changed each (docs/robust.md ablation).
-const std::vector<std::string> kRobustAblation = {"robust-noocc", "robust-nolowpass", "robust-tau08", "robust-nofs",
-                                                  "robust-noundershoot", "robust-nostrict", "robust-noabru",
-                                                  "robust-nocoplanar", "robust-nogate", "robust-noovershoot",
+const std::vector<std::string> kRobustAblation = {"robust-noocc", "robust-nolowpass", "robust-tau08",
+                                                  "robust-noundershoot", "robust-nostrict",
+                                                  "robust-nocoplanar", "robust-noovershoot",
                                                   "robust-nogrow"};
 
 std::vector<std::string> all_methods(bool variants = true) {
@@ -170,12 +170,9 @@ VcarParams vcar_params(const std::string& variant, const Experiment& e, const st
     if (variant == "robust-noocc") p.fine_occlusion = false;
     else if (variant == "robust-nolowpass") p.abr_lowpass = false;
     else if (variant == "robust-tau08") p.tau_fine = 0.8f;
-    else if (variant == "robust-nofs") p.foreshortening = false;
     else if (variant == "robust-noundershoot") p.undershoot_band = 0.f;
     else if (variant == "robust-nostrict") p.tau_strict = 0.f;
-    else if (variant == "robust-noabru") p.abr_undershoot = false;
     else if (variant == "robust-nocoplanar") p.coplanar_radius = 0.f;
-    else if (variant == "robust-nogate") p.undershoot_gate = false;
     else if (variant == "robust-noovershoot") p.overshoot_min = 0.f;
     else if (variant == "robust-nogrow") p.grow_max = 0.f;
     else if (variant != "robust") throw Error("unknown variant '" + variant + "'", "--methods");

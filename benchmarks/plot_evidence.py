@@ -24,8 +24,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RIGS = ["forward", "orbit", "sparse", "hemisphere"]
 PEERS = ["naive", "sagd", "flashsplat", "gaussiancut", "ludvig", "lbg"]
 VARIANTS = ["coarse", "sss", "abr", "full", "occlusion", "gapdir", "robust"]
-ROBUST_ABLATION = ["robust-noocc", "robust-nolowpass", "robust-tau08", "robust-nofs", "robust-noundershoot",
-                   "robust-nostrict", "robust-noabru", "robust-nocoplanar", "robust-nogate", "robust-noovershoot",
+ROBUST_ABLATION = ["robust-noocc", "robust-nolowpass", "robust-tau08", "robust-noundershoot",
+                   "robust-nostrict", "robust-nocoplanar", "robust-noovershoot",
                    "robust-nogrow"]
 TARGETS = ["sphere", "torus", "cylinder", "box"]
 NUM = {"seed", "gaussians", "object_gaussians", "level", "width", "height", "n_train", "n_eval", "miou", "macc",

@@ -18,6 +18,25 @@ void put_disc(vcar::GaussianScene& s, std::size_t i, const Eigen::Vector3f& mu, 
 }
 }  // namespace
 
+TEST_CASE("Eq. R10 normal and flatness by hand: the smallest axis, 1 - s_a / s_b") {
+  vcar::GaussianScene s;
+  s.resize(4);
+  put_disc(s, 0, {0, 0, 0}, 1.f, 0.01f);  // disc: n = z, phi = 1 - 0.01 / 1 = 0.99
+  const auto [n0, phi0] = vcar::detail::normal_and_flatness(s, 0);
+  CHECK(n0.isApprox(Eigen::Vector3f::UnitZ()));
+  CHECK(phi0 == Approx(0.99f));
+  put_disc(s, 1, {0, 0, 0}, 1.f, 0.01f, 90.f);  // the same disc turned 90 degrees about x: n = +-y
+  CHECK(vcar::detail::normal_and_flatness(s, 1).first.cwiseAbs().isApprox(Eigen::Vector3f::UnitY(), 1e-5f));
+  // Scales (1, 0.5, 0.25): smallest axis z, s_b = 0.5, phi = 1 - 0.25 / 0.5 = 0.5.
+  s.set(2, Eigen::Vector3f::Zero(), Eigen::Vector3f(0.f, std::log(0.5f), std::log(0.25f)), {1, 0, 0, 0}, 0.f);
+  CHECK(vcar::detail::normal_and_flatness(s, 2).second == Approx(0.5f));
+  // A ball and a needle have no plane: phi = 0 (the needle's two small axes are equal).
+  s.set(3, Eigen::Vector3f::Zero(), Eigen::Vector3f(0.f, std::log(0.01f), std::log(0.01f)), {1, 0, 0, 0}, 0.f);
+  CHECK(vcar::detail::normal_and_flatness(s, 3).second == Approx(0.f).margin(1e-6));
+  put_disc(s, 3, {0, 0, 0}, 0.2f, 0.2f);
+  CHECK(vcar::detail::normal_and_flatness(s, 3).second == Approx(0.f).margin(1e-6));
+}
+
 TEST_CASE("Eq. R10 coplanarity by hand: distance, angle and slab") {
   vcar::detail::PlanePoint a{{0, 0, 0}, {0, 0, 1}, 0.01f, true};
   const float cos5 = std::cos(5.f * 3.14159265f / 180.f);
@@ -142,9 +161,6 @@ TEST_CASE("VcarParams: R10 needs the coarse occlusion test, and its ranges") {
   CHECK_NOTHROW(p.validate());
   p.coarse_occlusion = false;
   CHECK_THROWS_WITH(p.validate(), Catch::Contains("coarse_occlusion"));
-  p = vcar::VcarParams::robust();
-  p.coplanar_angle_deg = 0.f;
-  CHECK_THROWS_WITH(p.validate(), Catch::Contains("coplanar_angle_deg"));
   p = vcar::VcarParams::robust();
   p.coplanar_radius = -1.f;
   CHECK_THROWS_WITH(p.validate(), Catch::Contains("coplanar_radius"));

@@ -20,7 +20,8 @@ TEST_CASE("Eq. R7 by hand: decisive when N(tau_strict) >= (1 - s) N(tau_fine)") 
 namespace {
 // Nine Gaussians inside every mask (R = 1) and one, at pixel (1, 10), inside 6 of 10 (R = 0.6):
 // N(0.5) = 10, N(0.85) = 9. The fine round's vote, paper or robust, over the ten views.
-std::vector<Index> fine_selection(const vcar::VcarParams& p, vcar::detail::FineVerdict* verdict) {
+std::vector<Index> fine_selection(const vcar::VcarParams& p, vcar::detail::FineVerdict* verdict,
+                                  float split = vcar::split_fraction) {
   std::vector<Eigen::Vector3f> mus;
   for (int k = 0; k < 9; ++k) mus.push_back({-0.25f + 0.05f * static_cast<float>(k), 0.05f, 1.f});  // pixels 7.5-11.5
   mus.push_back({-0.85f, 0.05f, 1.f});
@@ -33,7 +34,7 @@ std::vector<Index> fine_selection(const vcar::VcarParams& p, vcar::detail::FineV
   for (int v = 0; v < 10; ++v) fine.add_view(c, v < 6 ? &whole : &inner, nullptr, p.depth_tolerance);
   std::vector<Index> idx;
   std::vector<float> scores;
-  *verdict = fine.selected(p.tau_fine, p.tau_strict, p.split_fraction, idx, scores);
+  *verdict = fine.selected(p.tau_fine, p.tau_strict, split, idx, scores);
   REQUIRE(idx.size() == scores.size());
   return idx;
 }
@@ -47,15 +48,12 @@ TEST_CASE("Eq. R7 in the fine round: a decisive vote takes tau_strict, a split o
     p.tau_fine = 0.5f;
     p.tau_strict = 0.85f;
     vcar::detail::FineVerdict v;
-    p.split_fraction = 0.1f;  // 9 >= 0.9 * 10: decisive
-    CHECK(fine_selection(p, &v) == nine);
+    CHECK(fine_selection(p, &v, 0.1f) == nine);  // 9 >= 0.9 * 10: decisive
     CHECK(v.tau == 0.85f);
     CHECK_FALSE(v.split);
-    p.split_fraction = 0.05f;  // 9 < 0.95 * 10: split
-    CHECK(fine_selection(p, &v) == ten);
+    CHECK(fine_selection(p, &v, 0.05f) == ten);  // 9 < 0.95 * 10: split
     CHECK(v.tau == 0.5f);
     CHECK(v.split);
-    p.split_fraction = 0.1f;
     p.tau_strict = 0.f;  // off: never split
     CHECK(fine_selection(p, &v) == ten);
     CHECK(v.tau == 0.5f);

@@ -73,14 +73,11 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
   const auto r = VcarParams::robust();
   CHECK(r.fine_occlusion);
   CHECK(r.coarse_occlusion);
-  CHECK_FALSE(r.foreshortening);  // R5: off since the field (docs/robust.md)
   CHECK(r.view_reliability);      // R13
   CHECK(r.tau_fine == 0.7f);
   CHECK(r.undershoot_band > 0.f);
-  CHECK(r.undershoot_gate);  // R6c
   CHECK(r.tau_strict > r.tau_fine);
   CHECK(r.abr_lowpass);  // as the paper; R8 reads own footprints after a split vote
-  CHECK(r.abr_undershoot);  // R8
   CHECK(r.overshoot_min > 0.f);      // R11
   CHECK(r.overshoot_reach == 0.f);   // R11b's reach: measured, not adopted (docs/robust.md)
   CHECK(r.grow_max > 0.f);           // R12
@@ -89,13 +86,10 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
   CHECK_NOTHROW(r.validate());
   for (const auto& p : {VcarParams::nvos(), VcarParams::lerf(), VcarParams::reference_code()}) {
     CHECK_FALSE(p.robust_vote());
-    CHECK_FALSE(p.foreshortening);
     CHECK_FALSE(p.view_reliability);
     CHECK(p.undershoot_band == 0.f);
-    CHECK_FALSE(p.undershoot_gate);
     CHECK(p.tau_strict <= p.tau_fine);  // Eq. R7 off
     CHECK(p.abr_lowpass);
-    CHECK_FALSE(p.abr_undershoot);
     CHECK(p.overshoot_min == 0.f);     // Eq. R11 off
     CHECK(p.grow_max == 0.f);          // Eq. R12 off
   }
@@ -116,9 +110,8 @@ TEST_CASE("validate: rho = 1 can never trigger the strict gate, and the robust p
   p = {}; p.undershoot_band = NAN;  CHECK(where_of(p) == "undershoot_band");
   p = {}; p.undershoot_band = 2.f;  CHECK(where_of(p) == "");
   p = {}; p.tau_strict = 1.2f;      CHECK(where_of(p) == "tau_strict");
-  p = {}; p.split_fraction = -0.1f; CHECK(where_of(p) == "split_fraction");
-  p = {}; p.split_fraction = NAN;   CHECK(where_of(p) == "split_fraction");
   // Each mechanism alone makes the vote RobustVoting's.
-  p = {}; p.foreshortening = true;  CHECK(p.robust_vote());
+  p = {}; p.view_reliability = true; CHECK(p.robust_vote());
+  p = {}; p.fine_occlusion = true;   CHECK(p.robust_vote());
   p = {}; p.undershoot_band = 1.f;  CHECK(p.robust_vote());
 }

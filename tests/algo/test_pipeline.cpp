@@ -368,8 +368,8 @@ TEST_CASE("Eq. R8: ABR reads the training masks widened by their undershoot only
   // masks it is decisive and is the result.
   CHECK(eroded.undershoot_applied);
   CHECK(!exact.undershoot_applied);
-  // Switched off, or in the paper's preset: never.
-  p.abr_undershoot = false;
+  // Switched off (R6 and R8 are one correction), or in the paper's preset: never.
+  p.undershoot_band = 0.f;
   CHECK(run(5).abr_masks_widened == 0);
   p = vcar::VcarParams::nvos();
   p.force_fine_round = true;
@@ -389,28 +389,24 @@ TEST_CASE("Eq. R8: ABR reads the training masks widened by their undershoot only
   CHECK(!full(5, nv).diagnostics.undershoot_applied);
 
   // Eq. R6c: a decisive vote without R6 gives the selection of a run without R6, bit for bit;
-  // a split one the selection of a run without the gate.
-  vcar::VcarParams no_r6 = p, ungated = p;
+  // a split one is R6's.
+  vcar::VcarParams no_r6 = p;
   no_r6.undershoot_band = 0.f;
-  ungated.undershoot_gate = false;
   const vcar::SegmentationResult g0 = full(0, p), n0 = full(0, no_r6);
   CHECK(g0.indices == n0.indices);
   CHECK(g0.scores == n0.scores);
-  const vcar::SegmentationResult g5 = full(5, p), u5 = full(5, ungated);
-  CHECK(g5.indices == u5.indices);
-  CHECK(g5.scores == u5.scores);
-  CHECK(full(0, ungated).diagnostics.undershoot_applied);
+  CHECK(!g0.diagnostics.undershoot_applied);
+  const vcar::SegmentationResult g5 = full(5, p);
+  CHECK(g5.diagnostics.undershoot_applied);
 
   // Eq. R8 reads the Gaussians' own footprints after a split vote, whatever abr_lowpass says.
-  vcar::VcarParams own = p, lowpass_r8_off = p;
+  vcar::VcarParams own = p, own_no_r6 = no_r6;
   own.abr_lowpass = false;
-  lowpass_r8_off.abr_undershoot = false;
+  own_no_r6.abr_lowpass = false;
   const vcar::SegmentationResult s_own = full(5, own);
   REQUIRE(p.abr_lowpass);
   CHECK(g5.log_scale == s_own.log_scale);
-  vcar::VcarParams own_r8_off = lowpass_r8_off;
-  own_r8_off.abr_lowpass = false;
-  CHECK(full(5, lowpass_r8_off).log_scale != full(5, own_r8_off).log_scale);  // the low-pass matters here
+  CHECK(full(5, no_r6).log_scale != full(5, own_no_r6).log_scale);  // the low-pass matters here
 }
 
 TEST_CASE("Eq. R11: masks that overshoot the render's occlusion edges are eroded; exact ones are not") {

@@ -8,7 +8,8 @@
 // cannot tell it from the target's own underside. Its geometry can: it is flat, and the part of
 // the same surface that the cameras do see, next to it, is background. So a fine candidate i
 // that no training view sees takes the label of the seen Gaussians of its own plane nearby:
-//   n_i, phi_i        the normal and flatness of Eq. R5 (foreshortening.hpp)
+//   n_i = r_a         the axis of its smallest scale s_a (a = argmin_d s_d): the disc's normal
+//   phi_i = 1 - s_a / s_b, s_b the smaller of the other two scales (flatness: disc 1, ball 0)
 //   t_i = min_d s_d   its thickness
 //   Q_i = { q seen, phi_q >= phi_min, |mu_q - mu_i| <= r_c,                 (coplanar neighbours)
 //           |n_i . n_q| >= cos alpha, |n_i . (mu_q - mu_i)| <= k_t (t_i + t_q) }
@@ -17,7 +18,7 @@
 //   B_i = |{q in Q_i : q not selected}|,  S_i = |{q in Q_i : q selected}| + |E_i|
 //   i is dropped  iff  i is hidden, phi_i >= phi_min and B_i > S_i                      (R10)
 // with r_c = c_r * D, D the selection's extent (the largest distance of an Eq. 4 inlier from
-// the robust centre), alpha = coplanar_angle_deg, k_t = coplanar_slab, beta = 60 degrees and
+// the robust centre), alpha = 5 degrees, k_t = 1 (CoplanarParams), beta = 60 degrees and
 // sigma_c = 3. E_i are seen faces of the selection that meet i's plane edge-on and reach it
 // within their 3-sigma extent: the plane is then one of the object's own faces (a box pressed
 // against another box), not a surface that passes under it (a table under a ring, whose seen
@@ -33,11 +34,11 @@
 #include <cmath>
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
 
-#include "vcar/algo/foreshortening.hpp"
 #include "vcar/algo/robust_sphere.hpp"
 #include "vcar/core/gaussian_scene.hpp"
 #include "vcar/core/parallel.hpp"
@@ -62,8 +63,18 @@ struct PlanePoint {
   Eigen::Matrix3f A = Eigen::Matrix3f::Zero();  // columns s_d r_d: n^T Sigma n = |A^T n|^2
 };
 
+// Normal n_i and flatness phi_i of Gaussian i (Eq. R10's, above).
+inline std::pair<Eigen::Vector3f, float> normal_and_flatness(const GaussianScene& scene, Index i) {
+  int a = 0;
+  for (int d = 1; d < 3; ++d)
+    if (scene.log_scale[d][i] < scene.log_scale[a][i]) a = d;
+  const float s_b = std::min(scene.log_scale[(a + 1) % 3][i], scene.log_scale[(a + 2) % 3][i]);
+  const float phi = std::clamp(1.f - std::exp(scene.log_scale[a][i] - s_b), 0.f, 1.f);
+  return {scene.R(i).col(a), std::isfinite(phi) ? phi : 0.f};
+}
+
 inline PlanePoint plane_point(const GaussianScene& scene, Index i, float min_flatness) {
-  const auto [n, phi] = Foreshortening::normal_and_flatness(scene, i);
+  const auto [n, phi] = normal_and_flatness(scene, i);
   const float t = std::exp(std::min({scene.log_scale[0][i], scene.log_scale[1][i], scene.log_scale[2][i]}));
   PlanePoint p{scene.mu(i), n, t, phi >= min_flatness && std::isfinite(t)};
   p.A = scene.R(i);

@@ -18,6 +18,10 @@
 
 namespace vcar {
 
+// Eq. R7's s: the largest fraction of the majority's Gaussians between the two thresholds in a
+// decisive vote.
+inline constexpr float split_fraction = 0.1f;
+
 // Eq. R7: true when the vote is decisive, i.e. n_strict (kept at tau_strict) >= (1 - split)
 // n_majority (kept at tau_fine); split in [0, 1].
 inline bool decisive_vote(std::size_t n_strict, std::size_t n_majority, float split) noexcept {

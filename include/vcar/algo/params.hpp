@@ -80,38 +80,26 @@ struct VcarParams {
   bool coarse_occlusion = false;
   // Eq. R2: prior weight, in views, that ties each evidence level's ratio to the level below.
   float kappa = 2.f;
-  // Eq. R5: the unoccluded and sure levels weigh each view by how face-on it sees the Gaussian,
-  // omega = (1 - phi) + phi |n . d| (n the normal of its smallest axis, phi its flatness).
-  bool foreshortening = false;
-  // Eq. R6: in the fine round, background pixels within undershoot_band e_j px of the
-  // mask are no evidence, e_j the mask's undershoot measured against the render of G_coarse;
-  // 0 = off.
+  // The undershoot correction, Eq. R6 and R8 (one mechanism; 0 = off). R6: in the fine round,
+  // background pixels within undershoot_band e_j px of the mask are no evidence, e_j the mask's
+  // undershoot measured against the render of G_coarse (R6a); R6c: only where the vote without
+  // it is split (Eq. R7), so a decisive vote without it is the result. R8: when the fine vote is
+  // split, ABR reads each training view's mask widened by e_j, and the Gaussians' own
+  // footprints (no low-pass). Needs tau_strict for R6c and R8.
   float undershoot_band = 0.f;
-  // Eq. R6c (R6's gate): R7 reads the fine vote without R6 first, and R6 decides only where
-  // that vote is split (masks that undershoot); a decisive vote without it is the result.
-  // Inert without undershoot_band and tau_strict.
-  bool undershoot_gate = false;
   // Eq. R7: the fine round keeps tau_strict instead of tau_fine when the vote is decisive, i.e.
-  // when at most a fraction split_fraction of the Gaussians kept at tau_fine fall below
-  // tau_strict; tau_strict <= tau_fine (0) = off.
+  // when at most a fraction 0.1 (split_fraction, decisive_threshold.hpp) of the Gaussians kept
+  // at tau_fine fall below tau_strict; tau_strict <= tau_fine (0) = off.
   float tau_strict = 0.f;
-  float split_fraction = 0.1f;
-  // Eq. R8: when the fine vote is split (R7 kept tau_fine), ABR reads each training view's mask
-  // widened by its measured undershoot e_j (R6a), and the Gaussians' own footprints (no
-  // low-pass). Needs undershoot_band > 0 and tau_strict.
-  bool abr_undershoot = false;
   // Eq. 9-13 read Sigma2D with the renderer's eps2d low-pass (conventions §3, true) or the
   // Gaussian's own footprint (false: overflow within ~1.6 px no longer forces f_min). Eq. R8
   // reads the own footprint after a split fine vote whatever this says.
   bool abr_lowpass = true;
   // Eq. R10: a fine candidate that no training view sees (the coarse round's occlusion test) is
   // background when more seen background Gaussians than seen selected ones lie on its plane
-  // within coplanar_radius D (D the selection's extent): normals within coplanar_angle_deg,
-  // plane distance within coplanar_slab times the two thicknesses. Needs coarse_occlusion;
-  // 0 = off.
+  // within coplanar_radius D (D the selection's extent): normals within 5 degrees, plane
+  // distance within the two thicknesses (CoplanarParams). Needs coarse_occlusion; 0 = off.
   float coplanar_radius = 0.f;
-  float coplanar_angle_deg = 5.f;
-  float coplanar_slab = 1.f;
   // Eq. R11: a view's mask whose contour lies o_j >= overshoot_min px outside the occlusion
   // edges of the view's render (median over the contour; depth steps over depth_tolerance, the
   // render is asked for depth) is eroded by o_j + overshoot_margin px before it is voted and
@@ -173,19 +161,15 @@ struct VcarParams {
   // weighted by how its mask agrees with the round's consensus (R13). What vcar::segment uses
   // when given no parameters. Chosen on the field's tuning seed and the synthetic suite
   // (docs/notes/default-2026-12-02.md): fine threshold 0.7 (0.5 let GrabCut's leaks through,
-  // 0.8 lost eroded masks' rims), R13 on (SAM-like drift), R5 off (foreshortening: never
-  // better on the field's tuning seed, a trade of mIoU for 3D F1 on the synthetic suite). (R1,
-  // R4 and R9 were removed earlier: inert in every preset and ablation.)
+  // 0.8 lost eroded masks' rims), R13 on (SAM-like drift). (R1, R4, R5 and R9 were
+  // removed: inert in every preset, or never better on the field; docs/robust.md, appendix.)
   static VcarParams robust() {
     VcarParams p;
     p.tau_fine = 0.7f;
     p.fine_occlusion = true;
     p.coarse_occlusion = true;
     p.undershoot_band = 1.5f;
-    p.undershoot_gate = true;
     p.tau_strict = 0.85f;
-    p.split_fraction = 0.1f;
-    p.abr_undershoot = true;
     p.coplanar_radius = 0.75f;
     p.overshoot_min = 1.f;
     p.grow_max = 0.1f;
@@ -215,7 +199,7 @@ struct VcarParams {
 
   // True when a mechanism beyond the paper changes the vote (RobustVoting, Eq. R2-R6).
   bool robust_vote() const {
-    return fine_occlusion || coarse_occlusion || foreshortening || undershoot_band > 0.f || view_reliability;
+    return fine_occlusion || coarse_occlusion || undershoot_band > 0.f || view_reliability;
   }
 
   // Calls f(name, field) for every field, names exactly as declared (const and non-const).
@@ -235,12 +219,9 @@ struct VcarParams {
     f("min_frame_content", p.min_frame_content); f("min_mask_fraction", p.min_mask_fraction);
     f("force_fine_round", p.force_fine_round);
     f("fine_occlusion", p.fine_occlusion); f("coarse_occlusion", p.coarse_occlusion); f("kappa", p.kappa);
-    f("foreshortening", p.foreshortening); f("undershoot_band", p.undershoot_band);
-    f("undershoot_gate", p.undershoot_gate);
-    f("tau_strict", p.tau_strict); f("split_fraction", p.split_fraction); f("abr_lowpass", p.abr_lowpass);
-    f("abr_undershoot", p.abr_undershoot);
-    f("coplanar_radius", p.coplanar_radius); f("coplanar_angle_deg", p.coplanar_angle_deg);
-    f("coplanar_slab", p.coplanar_slab); f("overshoot_min", p.overshoot_min);
+    f("undershoot_band", p.undershoot_band);
+    f("tau_strict", p.tau_strict); f("abr_lowpass", p.abr_lowpass);
+    f("coplanar_radius", p.coplanar_radius); f("overshoot_min", p.overshoot_min);
     f("overshoot_margin", p.overshoot_margin); f("overshoot_reach", p.overshoot_reach);
     f("grow_max", p.grow_max); f("grow_margin", p.grow_margin);
     f("view_reliability", p.view_reliability);
@@ -283,12 +264,8 @@ struct VcarParams {
     if (!(undershoot_band >= 0.f && undershoot_band <= 100.f))
       bad("undershoot_band", "must be in [0, 100] (0 = off), got " + std::to_string(undershoot_band));
     unit("tau_strict", tau_strict);
-    unit("split_fraction", split_fraction);
     if (!(coplanar_radius >= 0.f && coplanar_radius <= 10.f))
       bad("coplanar_radius", "must be in [0, 10] (0 = off), got " + std::to_string(coplanar_radius));
-    if (!(coplanar_angle_deg > 0.f && coplanar_angle_deg < 90.f))
-      bad("coplanar_angle_deg", "must be in (0, 90), got " + std::to_string(coplanar_angle_deg));
-    if (!(coplanar_slab >= 0.f && std::isfinite(coplanar_slab))) bad("coplanar_slab", "must be >= 0");
     if (coplanar_radius > 0.f && !coarse_occlusion)
       bad("coplanar_radius", "Eq. R10 reads the coarse round's occlusion test: set coarse_occlusion=true or coplanar_radius=0");
     if (!(overshoot_min >= 0.f && overshoot_min <= 100.f))

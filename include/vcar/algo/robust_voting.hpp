@@ -1,6 +1,6 @@
 #pragma once
 // Beyond the paper: visibility-based voting that weighs evidence by how reliable it is
-// (docs/robust.md, Eq. R2-R6). With no depth images and foreshortening and gamma off it is
+// (docs/robust.md, Eq. R2-R13). With no depth images, gamma 0 and reliability off it is
 // exactly Eq. 1-3 (VisibilityVoting).
 //
 // Per candidate i and view j where the centre is visible by Eq. 1 at pixel p, up to three nested
@@ -21,18 +21,13 @@
 // (kappa = 0: the most reliable level with a view decides alone.) With no depth images and
 // gamma 0 every level holds the same counts and R_i = F_i / V_i exactly: Eq. 3.
 // Two more mechanisms, each an option (RobustVoteOptions):
-//   foreshortening (Eq. R5, foreshortening.hpp): the unoccluded and sure levels sum the weight
-//                   omega_ij of each view (how face-on it sees the Gaussian) instead of counting
-//                   views: V^o_i = sum omega_ij, F^o_i = sum omega_ij M(p), and so for the sure
-//                   level (which of the two levels shrinks is still decided by the counts);
-//                   16 more bytes per candidate for the sums, 16 for phi_i n_i, 1 - phi_i;
 //   gamma (Eq. R6, undershoot.hpp): in a round whose frames are renders of the candidates, the
 //                   background pixels within gamma e_j of the mask are unsure, e_j the mask's
 //                   undershoot measured against the render's alpha. ratio(k, false) reads the
 //                   vote without R6 (R^1: what R6's gate, Eq. R6c, decides on);
 //   reliability (Eq. R13, view_reliability.hpp): after the round, weigh_views(tau) weighs each
 //                   view by how its mask agrees with the round's consensus, and the unoccluded
-//                   level sums r_j (times omega_ij with R5) instead of counting views; two bits
+//                   level sums r_j instead of counting views; two bits
 //                   per candidate and view.
 // Views are voted one at a time over all candidates in parallel chunks; each candidate is
 // written by one thread, so results are identical for any thread count.
@@ -44,7 +39,6 @@
 #include <utility>
 #include <vector>
 
-#include "vcar/algo/foreshortening.hpp"
 #include "vcar/algo/mean_projection.hpp"
 #include "vcar/algo/undershoot.hpp"
 #include "vcar/algo/view_reliability.hpp"
@@ -59,7 +53,6 @@ namespace vcar {
 // The mechanisms of RobustVoting (each off by default; VcarParams carries them).
 struct RobustVoteOptions {
   float kappa = 2.f;            // Eq. R2: prior weight in views
-  bool foreshortening = false;  // Eq. R5: views weighted by how face-on they see the Gaussian
   float gamma = 0.f;            // Eq. R6: outer band reach factor on the undershoot (0 = off)
   bool reliability = false;     // Eq. R13: views weighted by their agreement with the consensus
 };
@@ -71,13 +64,13 @@ public:
 
   // Every Gaussian of `scene` is a candidate (means referenced: the scene must outlive this).
   explicit RobustVoting(const GaussianScene& scene, const RobustVoteOptions& o = {}) : o_(o) {
-    init(scene, scene.mean[0].data(), scene.mean[1].data(), scene.mean[2].data(), scene.size());
+    init(scene.mean[0].data(), scene.mean[1].data(), scene.mean[2].data(), scene.size());
   }
   // The Gaussians `candidates` of `scene` (scene indices, any order; means copied).
   RobustVoting(const GaussianScene& scene, std::vector<Index> candidates, const RobustVoteOptions& o = {})
       : o_(o), candidates_(std::move(candidates)) {
     own_ = detail::candidate_means(scene, candidates_);
-    init(scene, own_[0].data(), own_[1].data(), own_[2].data(), candidates_.size());
+    init(own_[0].data(), own_[1].data(), own_[2].data(), candidates_.size());
   }
   RobustVoting(const RobustVoting&) = delete;
   RobustVoting& operator=(const RobustVoting&) = delete;
@@ -101,7 +94,7 @@ public:
     if (o_.reliability && chunk % 64 != 0) throw Error("chunk must be a multiple of 64 with reliability", "voting");
     ++views_;
     weighed_ = false;
-    if (o_.reliability) rel_.add_view(), centres_.push_back(camera.position());
+    if (o_.reliability) rel_.add_view();
     const std::uint8_t* sure = nullptr;  // null: every pixel is sure
     if (sure_level() && alpha) {
       last_undershoot_ = undershoot_px(*mask, *alpha);                                     // Eq. R6a
@@ -118,8 +111,6 @@ public:
     const float* D = expected_depth ? expected_depth->data.data() : nullptr;
     const float* A = alpha ? alpha->data.data() : nullptr;
     const float scale = 1.f + tolerance;
-    const bool weighted = o_.foreshortening;
-    const Eigen::Vector3f C = camera.position();
     parallel_chunks(static_cast<std::int64_t>(n_), static_cast<std::int64_t>(chunk),
                     [&](std::int64_t, std::int64_t b, std::int64_t e) {
       constexpr std::size_t L = detail::mean_batch;
@@ -137,11 +128,8 @@ public:
           if (D && A[p] >= 0.5f && !(z[l] <= D[p] / A[p] * scale)) continue;                  // Eq. R3
           ++c_[2][i]; c_[3][i] = static_cast<std::uint16_t>(c_[3][i] + f);
           if (o_.reliability) rel_.see(i, f != 0);                                            // Eq. R13
-          const float omega = weighted ? fs_.weight(i, x_[i], y_[i], z_[i], C) : 1.f;        // Eq. R5
-          if (weighted) { w_[0][i] += omega; w_[1][i] += f ? omega : 0.f; }
           if (!sure_counts || (sure && !sure[p])) continue;                                    // Eq. R6b
           ++c_[4][i]; c_[5][i] = static_cast<std::uint16_t>(c_[5][i] + f);
-          if (weighted) { w_[2][i] += omega; w_[3][i] += f ? omega : 0.f; }
         }
       }
     });
@@ -156,24 +144,16 @@ public:
   std::uint16_t foreground(std::size_t k, int level = 0) const { return c_[2 * at(level) + 1][k]; }
   // V^o of every candidate (level 1), aligned with the candidates.
   std::span<const std::uint16_t> unoccluded_views() const { return c_[2]; }
-  // Eq. R5 sums of candidate k at level 1 (unoccluded) or 2 (sure); 0 without foreshortening.
-  float weight(std::size_t k, int level) const { return o_.foreshortening ? w_[2 * at(level) - 2][k] : 0.f; }
-  float weighted_foreground(std::size_t k, int level) const {
-    return o_.foreshortening ? w_[2 * at(level) - 1][k] : 0.f;
-  }
   // Eq. R13: weighs the views voted so far by their agreement with the consensus at `tau`
   // (first the unweighted vote's, then the weighted one's, `iterations` times); the unoccluded
   // level then sums the weights. No effect without the reliability option. Returns r_j.
   const std::vector<float>& weigh_views(float tau, int iterations = 2) {
     if (!o_.reliability) return view_weights_;
-    auto omega = [&](std::size_t k, std::size_t j) {
-      return o_.foreshortening ? fs_.weight(k, x_[k], y_[k], z_[k], centres_[j]) : 1.f;   // Eq. R5
-    };
     weighed_ = false;
     for (int it = 0; it < iterations; ++it) {
       const auto consensus = rel_.bits([&](std::size_t k) { return ratio(k) >= tau; });
       view_weights_ = rel_.agreement(consensus);                                             // Eq. R13a
-      rel_.weighted(view_weights_, rv_, rf_, omega);                                         // Eq. R13b
+      rel_.weighted(view_weights_, rv_, rf_);                                                // Eq. R13b
       weighed_ = true;
     }
     return view_weights_;
@@ -181,20 +161,20 @@ public:
   // Eq. R6a of the latest view voted with gamma > 0 and a render (px).
   double last_undershoot_px() const noexcept { return last_undershoot_; }
 
-  // Eq. R2 (Eq. 3 at level 0), with Eq. R5's sums at levels 1-2 when foreshortening is on.
+  // Eq. R2 (Eq. 3 at level 0), with Eq. R13b's sums at level 1 once the views are weighed.
   // undershoot = false: the vote without Eq. R6 (R^1, what R6's gate reads).
   float ratio(std::size_t k, bool undershoot = true) const {
     // A level with the same counts as the one below adds no evidence: R stays what it was, bit
-    // for bit (so Eq. 3 comes out identical whenever the mechanisms add nothing). With R5 the
-    // unoccluded level always weighs its views, so it always shrinks.
+    // for bit (so Eq. 3 comes out identical whenever the mechanisms add nothing). Once R13
+    // weighed the views the unoccluded level always sums them, so it always shrinks.
     float R = static_cast<float>(foreground(k)) / static_cast<float>(std::max<std::uint16_t>(visible(k), 1));
     const int top = undershoot && sure_level() ? 2 : 1;
     for (int level = 1; level <= top; ++level) {
       const bool same = visible(k, level) == visible(k, level - 1) && foreground(k, level) == foreground(k, level - 1);
       const bool weighed = weighed_ && level == 1;  // Eq. R13b
-      if (same && !(weighed || (o_.foreshortening && level == 1))) continue;
-      float V = o_.foreshortening ? weight(k, level) : static_cast<float>(visible(k, level));
-      float F = o_.foreshortening ? weighted_foreground(k, level) : static_cast<float>(foreground(k, level));
+      if (same && !weighed) continue;
+      float V = static_cast<float>(visible(k, level));
+      float F = static_cast<float>(foreground(k, level));
       if (weighed) V = rv_[k], F = rf_[k];
       if (V + o_.kappa > 0.f) R = (F + o_.kappa * R) / (V + o_.kappa);                    // Eq. R2
     }
@@ -219,14 +199,10 @@ private:
   bool sure_level() const noexcept { return o_.gamma > 0.f; }
   int at(int level) const noexcept { return level == 2 && !sure_level() ? 1 : level; }
 
-  void init(const GaussianScene& scene, const float* x, const float* y, const float* z, std::size_t n) {
+  void init(const float* x, const float* y, const float* z, std::size_t n) {
     x_ = x; y_ = y; z_ = z; n_ = n;
     const std::size_t counters = sure_level() ? 6 : 4;
     for (std::size_t c = 0; c < counters; ++c) c_[c].assign(n, 0);
-    if (o_.foreshortening) {
-      fs_ = Foreshortening::of(scene, candidates_);
-      for (std::size_t c = 0; c < counters - 2; ++c) w_[c].assign(n, 0.f);
-    }
     if (o_.reliability) rel_ = ViewReliability(n);
   }
 
@@ -236,12 +212,9 @@ private:
   std::vector<Index> candidates_;
   std::array<std::vector<float>, 3> own_;
   std::array<std::vector<std::uint16_t>, 6> c_;  // V, F, V^o, F^o, V^s, F^s (the last two with R6)
-  Foreshortening fs_;
-  std::array<std::vector<float>, 4> w_;  // Eq. R5: weighted V^o, F^o, V^s, F^s
   std::vector<std::uint8_t> outer_;      // Eq. R6b: the sure plane with the outer band
   double last_undershoot_ = 0;
   ViewReliability rel_;                  // Eq. R13: V_j, F_j per view
-  std::vector<Eigen::Vector3f> centres_; // camera centre per view (Eq. R5 with R13)
   std::vector<float> view_weights_, rv_, rf_;  // r_j; V^r, F^r per candidate
   bool weighed_ = false;
 };

@@ -39,11 +39,10 @@ class RoundVote {
 public:
   RoundVote(const GaussianScene& scene, const std::vector<Index>* candidates, const VcarParams& p, bool fine)
       : occlusion_(p.occlusion_aware || (fine ? p.fine_occlusion : p.coarse_occlusion)),
-        overshoot_(p.overshoot_min > 0.f), grow_(!fine && p.grow_max > 0.f), undershoot_(fine && p.undershoot_band > 0.f),
-        gated_(undershoot_ && p.undershoot_gate) {
+        overshoot_(p.overshoot_min > 0.f), grow_(!fine && p.grow_max > 0.f), undershoot_(fine && p.undershoot_band > 0.f) {
     if (p.robust_vote()) {
       // Eq. R6 needs frames rendered from the candidates alone: the fine round's.
-      const RobustVoteOptions o{p.kappa, p.foreshortening, undershoot_ ? p.undershoot_band : 0.f, p.view_reliability};
+      const RobustVoteOptions o{p.kappa, undershoot_ ? p.undershoot_band : 0.f, p.view_reliability};
       if (candidates) robust_.emplace(scene, *candidates, o);
       else robust_.emplace(scene, o);
     } else if (candidates) {
@@ -96,7 +95,7 @@ public:
   // result; when it splits, the vote with R6 decides as above (Eq. R6c).
   FineVerdict selected(float tau, float tau_strict, float split, std::vector<Index>& indices,
                        std::vector<float>& scores) const {
-    if (gated_ && tau_strict > tau && decided(tau, tau_strict, split, indices, scores, false) == tau_strict)
+    if (undershoot_ && tau_strict > tau && decided(tau, tau_strict, split, indices, scores, false) == tau_strict)
       return {tau_strict, false, false};                                                     // Eq. R6c
     const float applied = decided(tau, tau_strict, split, indices, scores, true);
     return {applied, tau_strict > tau && applied == tau, undershoot_};
@@ -116,7 +115,7 @@ private:
     return tau_strict;
   }
 
-  bool occlusion_, overshoot_, grow_, undershoot_, gated_;
+  bool occlusion_, overshoot_, grow_, undershoot_;
   std::size_t overshoot_eroded_ = 0, grown_ = 0;
   std::optional<VisibilityVoting> paper_;
   std::optional<RobustVoting> robust_;

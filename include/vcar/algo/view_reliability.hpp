@@ -60,10 +60,8 @@ public:
     return r;
   }
 
-  // Eq. R13b: V^r and F^r of every candidate for the view weights r (r_j omega(k, j) when a
-  // per-candidate weight omega is given, e.g. Eq. R5's).
-  template <class Omega>
-  void weighted(const std::vector<float>& r, std::vector<float>& V, std::vector<float>& F, Omega&& omega) const {
+  // Eq. R13b: V^r and F^r of every candidate for the view weights r.
+  void weighted(const std::vector<float>& r, std::vector<float>& V, std::vector<float>& F) const {
     V.assign(n_, 0.f);
     F.assign(n_, 0.f);
     for (std::size_t j = 0; j < views(); ++j) {
@@ -71,9 +69,8 @@ public:
       for (std::size_t w = 0; w < words_; ++w)
         for (std::uint64_t s = seen_[j][w]; s; s &= s - 1) {
           const std::size_t k = w * 64 + static_cast<std::size_t>(std::countr_zero(s));
-          const float weight = r[j] * omega(k, j);
-          V[k] += weight;                                                                     // Eq. R13b
-          if (fg_[j][w] >> (k & 63) & 1) F[k] += weight;
+          V[k] += r[j];                                                                       // Eq. R13b
+          if (fg_[j][w] >> (k & 63) & 1) F[k] += r[j];
         }
     }
   }
