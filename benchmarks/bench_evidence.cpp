@@ -167,14 +167,14 @@ synth::OracleParams oracle_for(const Experiment& e) {
 VcarParams vcar_params(const std::string& variant, const Experiment& e, const std::vector<std::string>& set) {
   if (variant.rfind("robust", 0) == 0) {  // one preset for every rig: the library's default
     VcarParams p = VcarParams::robust();
-    if (variant == "robust-noocc") p.fine_occlusion = false;
+    if (variant == "robust-noocc") p.evidence.fine_occlusion = false;
     else if (variant == "robust-nolowpass") p.abr_lowpass = false;
     else if (variant == "robust-tau08") p.tau_fine = 0.8f;
-    else if (variant == "robust-noundershoot") p.undershoot_band = 0.f;
-    else if (variant == "robust-nostrict") p.tau_strict = 0.f;
-    else if (variant == "robust-nocoplanar") p.coplanar_radius = 0.f;
-    else if (variant == "robust-noovershoot") p.overshoot_min = 0.f;
-    else if (variant == "robust-nogrow") p.grow_max = 0.f;
+    else if (variant == "robust-noundershoot") p.undershoot.band = 0.f;
+    else if (variant == "robust-nostrict") p.strict.tau = 0.f;
+    else if (variant == "robust-nocoplanar") p.coplanar.radius = 0.f;
+    else if (variant == "robust-noovershoot") p.snap.overshoot_min = 0.f;
+    else if (variant == "robust-nogrow") p.snap.grow_max = 0.f;
     else if (variant != "robust") throw Error("unknown variant '" + variant + "'", "--methods");
     if (e.failure == "tau") { p.tau_coarse = static_cast<float>(e.level); p.tau_fine = static_cast<float>(e.level); }
     for (const std::string& kv : set) io::set_parameter(p, kv);

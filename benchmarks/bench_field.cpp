@@ -684,8 +684,8 @@ private:
           // the rig plus the occlusion test in both rounds (R3) and view reliability (R13), no
           // shrinkage between evidence levels (kappa 0). Not a library preset yet.
           p = evidence::is_360(k.rig_name) ? VcarParams::lerf() : VcarParams::nvos();
-          p.coarse_occlusion = p.fine_occlusion = p.view_reliability = true;
-          p.kappa = 0.f;
+          p.evidence.coarse_occlusion = p.evidence.fine_occlusion = p.reliability.enabled = true;
+          p.evidence.kappa = 0.f;
           r.preset = evidence::is_360(k.rig_name) ? "lerf+R3+R13" : "nvos+R3+R13";
         } else {
           throw Error("unknown VCAR variant '" + r.variant + "' (vcar:paper, vcar:robust, vcar:code or vcar:lean)", "--methods");

@@ -256,8 +256,8 @@ std::string summary_text(const Diagnostics& d, const VcarParams& p, std::size_t 
   if (!p.enable_abr) std::snprintf(buf, sizeof buf, "ABR       off (enable_abr=false)\n");
   else std::snprintf(buf, sizeof buf, "ABR       %zu Gaussians flagged, %zu compressed\n", d.abr_flagged, d.abr_compressed);
   s += buf;
-  if (d.tau_fine_applied > 0.f && p.tau_strict > p.tau_fine) {  // Eq. R7 (and R8) ran
-    std::snprintf(buf, sizeof buf, "fine vote %s: tau %.2f", d.tau_fine_applied < p.tau_strict ? "split" : "decisive",
+  if (d.tau_fine_applied > 0.f && p.strict.tau > p.tau_fine) {  // Eq. R7 (and R8) ran
+    std::snprintf(buf, sizeof buf, "fine vote %s: tau %.2f", d.tau_fine_applied < p.strict.tau ? "split" : "decisive",
                   static_cast<double>(d.tau_fine_applied));
     s += buf;
     if (d.undershoot_applied) s += ", undershoot band on (Eq. R6)";
@@ -276,7 +276,7 @@ std::string summary_text(const Diagnostics& d, const VcarParams& p, std::size_t 
     std::snprintf(buf, sizeof buf, "undershoot %zu masks grown to the render's occlusion edges (Eq. R12)\n", d.masks_grown);
     s += buf;
   }
-  if (p.coplanar_radius > 0.f && d.coplanar_dropped > 0) {  // Eq. R10 ran
+  if (p.coplanar.radius > 0.f && d.coplanar_dropped > 0) {  // Eq. R10 ran
     std::snprintf(buf, sizeof buf, "hidden    %zu Gaussians dropped: unseen, on a seen background plane (Eq. R10)\n",
                   d.coplanar_dropped);
     s += buf;

@@ -157,14 +157,14 @@ TEST_CASE("Eq. R10 drops the hidden table patch under an object and nothing of t
 
 TEST_CASE("VcarParams: R10 needs the coarse occlusion test, and its ranges") {
   vcar::VcarParams p = vcar::VcarParams::robust();
-  CHECK(p.coplanar_radius > 0.f);
+  CHECK(p.coplanar.radius > 0.f);
   CHECK_NOTHROW(p.validate());
-  p.coarse_occlusion = false;
+  p.evidence.coarse_occlusion = false;
   CHECK_THROWS_WITH(p.validate(), Catch::Contains("coarse_occlusion"));
   p = vcar::VcarParams::robust();
-  p.coplanar_radius = -1.f;
+  p.coplanar.radius = -1.f;
   CHECK_THROWS_WITH(p.validate(), Catch::Contains("coplanar_radius"));
-  for (const char* name : {"nvos", "lerf", "reference_code"}) CHECK(vcar::VcarParams::preset(name).coplanar_radius == 0.f);
+  for (const char* name : {"nvos", "lerf", "reference_code"}) CHECK(vcar::VcarParams::preset(name).coplanar.radius == 0.f);
 }
 
 TEST_CASE("Eq. R10 by hand: a seen face of the selection that meets the plane edge-on counts as selected") {

@@ -34,7 +34,7 @@ std::vector<Index> fine_selection(const vcar::VcarParams& p, vcar::detail::FineV
   for (int v = 0; v < 10; ++v) fine.add_view(c, v < 6 ? &whole : &inner, nullptr, p.depth_tolerance);
   std::vector<Index> idx;
   std::vector<float> scores;
-  *verdict = fine.selected(p.tau_fine, p.tau_strict, split, idx, scores);
+  *verdict = fine.selected(p.tau_fine, p.strict.tau, split, idx, scores);
   REQUIRE(idx.size() == scores.size());
   return idx;
 }
@@ -46,7 +46,7 @@ TEST_CASE("Eq. R7 in the fine round: a decisive vote takes tau_strict, a split o
   ten.push_back(9);
   for (vcar::VcarParams p : {vcar::VcarParams::robust(), vcar::VcarParams::nvos()}) {
     p.tau_fine = 0.5f;
-    p.tau_strict = 0.85f;
+    p.strict.tau = 0.85f;
     vcar::detail::FineVerdict v;
     CHECK(fine_selection(p, &v, 0.1f) == nine);  // 9 >= 0.9 * 10: decisive
     CHECK(v.tau == 0.85f);
@@ -54,11 +54,11 @@ TEST_CASE("Eq. R7 in the fine round: a decisive vote takes tau_strict, a split o
     CHECK(fine_selection(p, &v, 0.05f) == ten);  // 9 < 0.95 * 10: split
     CHECK(v.tau == 0.5f);
     CHECK(v.split);
-    p.tau_strict = 0.f;  // off: never split
+    p.strict.tau = 0.f;  // off: never split
     CHECK(fine_selection(p, &v) == ten);
     CHECK(v.tau == 0.5f);
     CHECK_FALSE(v.split);
-    p.tau_strict = 0.55f;  // R = 0.6 passes the strict threshold too
+    p.strict.tau = 0.55f;  // R = 0.6 passes the strict threshold too
     CHECK(fine_selection(p, &v) == ten);
     CHECK(v.tau == 0.55f);
     CHECK_FALSE(v.split);

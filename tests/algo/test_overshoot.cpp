@@ -105,10 +105,12 @@ TEST_CASE("Eq. R11b's reach: contour pixels in contact with a neighbour at the s
   CHECK(reach == Approx(0.5 * std::sqrt(128.0 / 3.14159265358979)));
   CHECK(vcar::overshoot_px(m, e, reach) == 0.0);
   CHECK(vcar::overshoot_reach_px(128, 0.0) == std::numeric_limits<double>::infinity());
-  // A reach under 1 px keeps only the 16 zeros; none at all when no contour pixel has an edge near.
+  // A reach under 1 px keeps only the 16 zeros.
   CHECK(vcar::overshoot_px(m, e, 0.5) == 0.0);
-  const Mask inner = square_mask(20, 20, 6, 6, 14, 14);  // 4 px from the band's edges
-  CHECK(vcar::overshoot_px(inner, e, 3.0) == 0.0);
+  // A mask that stops short (4 px inside the band's edges, every nearest edge outside it) reads
+  // its undershoot at any reach: only edges inside the mask are limited.
+  const Mask inner = square_mask(20, 20, 6, 6, 14, 14);
+  CHECK(vcar::overshoot_px(inner, e, 3.0) == -4.0);
   CHECK(vcar::overshoot_px(inner, e) == -4.0);
 }
 

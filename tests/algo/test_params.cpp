@@ -71,32 +71,32 @@ TEST_CASE("validate names the parameter at fault") {
 
 TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond the paper; the paper presets none") {
   const auto r = VcarParams::robust();
-  CHECK(r.fine_occlusion);
-  CHECK(r.coarse_occlusion);
-  CHECK(r.view_reliability);      // R13
+  CHECK(r.evidence.fine_occlusion);
+  CHECK(r.evidence.coarse_occlusion);
+  CHECK(r.reliability.enabled);      // R13
   CHECK(r.tau_fine == 0.7f);
-  CHECK(r.undershoot_band > 0.f);
-  CHECK(r.tau_strict > r.tau_fine);
+  CHECK(r.undershoot.band > 0.f);
+  CHECK(r.strict.tau > r.tau_fine);
   CHECK(r.abr_lowpass);  // as the paper; R8 reads own footprints after a split vote
-  CHECK(r.overshoot_min > 0.f);      // R11
-  CHECK(r.overshoot_reach == 0.f);   // R11b's reach: measured, not adopted (docs/robust.md)
-  CHECK(r.grow_max > 0.f);           // R12
-  CHECK(r.kappa == 2.f);
+  CHECK(r.snap.overshoot_min > 0.f);      // R11
+  CHECK(r.snap.overshoot_reach == 0.5f);  // R11b's reach (docs/robust.md)
+  CHECK(r.snap.grow_max > 0.f);           // R12
+  CHECK(r.evidence.kappa == 2.f);
   CHECK(r.robust_vote());
   CHECK_NOTHROW(r.validate());
   for (const auto& p : {VcarParams::nvos(), VcarParams::lerf(), VcarParams::reference_code()}) {
     CHECK_FALSE(p.robust_vote());
-    CHECK_FALSE(p.view_reliability);
-    CHECK(p.undershoot_band == 0.f);
-    CHECK(p.tau_strict <= p.tau_fine);  // Eq. R7 off
+    CHECK_FALSE(p.reliability.enabled);
+    CHECK(p.undershoot.band == 0.f);
+    CHECK(p.strict.tau <= p.tau_fine);  // Eq. R7 off
     CHECK(p.abr_lowpass);
-    CHECK(p.overshoot_min == 0.f);     // Eq. R11 off
-    CHECK(p.grow_max == 0.f);          // Eq. R12 off
+    CHECK(p.snap.overshoot_min == 0.f);     // Eq. R11 off
+    CHECK(p.snap.grow_max == 0.f);          // Eq. R12 off
   }
   CHECK(VcarParams::reference_code().force_fine_round);
   CHECK_FALSE(VcarParams::nvos().force_fine_round);
   // By name, as the command line and the Python module use them.
-  CHECK(VcarParams::preset("robust").undershoot_band == r.undershoot_band);
+  CHECK(VcarParams::preset("robust").undershoot.band == r.undershoot.band);
   CHECK(VcarParams::preset("reference_code").tau_fine == 0.9f);
   CHECK_THROWS_WITH(VcarParams::preset("paper"), Catch::Contains("robust, nvos, lerf, reference_code"));
 }
@@ -105,13 +105,13 @@ TEST_CASE("validate: rho = 1 can never trigger the strict gate, and the robust p
   VcarParams p;
   p.rho = 1.f;            CHECK(where_of(p) == "rho");
   p = {}; p.rho = 0.99f;  CHECK(where_of(p) == "");
-  p = {}; p.kappa = -1.f;      CHECK(where_of(p) == "kappa");
-  p = {}; p.undershoot_band = -1.f; CHECK(where_of(p) == "undershoot_band");
-  p = {}; p.undershoot_band = NAN;  CHECK(where_of(p) == "undershoot_band");
-  p = {}; p.undershoot_band = 2.f;  CHECK(where_of(p) == "");
-  p = {}; p.tau_strict = 1.2f;      CHECK(where_of(p) == "tau_strict");
+  p = {}; p.evidence.kappa = -1.f;      CHECK(where_of(p) == "kappa");
+  p = {}; p.undershoot.band = -1.f; CHECK(where_of(p) == "undershoot_band");
+  p = {}; p.undershoot.band = NAN;  CHECK(where_of(p) == "undershoot_band");
+  p = {}; p.undershoot.band = 2.f;  CHECK(where_of(p) == "");
+  p = {}; p.strict.tau = 1.2f;      CHECK(where_of(p) == "tau_strict");
   // Each mechanism alone makes the vote RobustVoting's.
-  p = {}; p.view_reliability = true; CHECK(p.robust_vote());
-  p = {}; p.fine_occlusion = true;   CHECK(p.robust_vote());
-  p = {}; p.undershoot_band = 1.f;  CHECK(p.robust_vote());
+  p = {}; p.reliability.enabled = true; CHECK(p.robust_vote());
+  p = {}; p.evidence.fine_occlusion = true;   CHECK(p.robust_vote());
+  p = {}; p.undershoot.band = 1.f;  CHECK(p.robust_vote());
 }

@@ -362,14 +362,14 @@ TEST_CASE("Eq. R8: ABR reads the training masks widened by their undershoot only
   CHECK(eroded.abr_masks_widened == cams.size());  // every training view has an undershooting mask
   // Exact masks: a decisive vote, ABR reads them as they are.
   const vcar::Diagnostics exact = run(0);
-  REQUIRE(exact.tau_fine_applied == p.tau_strict);
+  REQUIRE(exact.tau_fine_applied == p.strict.tau);
   CHECK(exact.abr_masks_widened == 0);
   // Eq. R6c: the vote without R6 splits on eroded masks, so R6 shapes the result; on exact
   // masks it is decisive and is the result.
   CHECK(eroded.undershoot_applied);
   CHECK(!exact.undershoot_applied);
   // Switched off (R6 and R8 are one correction), or in the paper's preset: never.
-  p.undershoot_band = 0.f;
+  p.undershoot.band = 0.f;
   CHECK(run(5).abr_masks_widened == 0);
   p = vcar::VcarParams::nvos();
   p.force_fine_round = true;
@@ -379,7 +379,7 @@ TEST_CASE("Eq. R8: ABR reads the training masks widened by their undershoot only
   erode_coarse = 2;
   p = vcar::VcarParams::robust();
   p.force_fine_round = true;
-  p.grow_max = 0.f;  // R12 would grow the eroded coarse masks back
+  p.snap.grow_max = 0.f;  // R12 would grow the eroded coarse masks back
   auto full = [&](int px, const vcar::VcarParams& q) {
     erode = px;
     return vcar::segment(w.scene, cams, prompt, renderer, seg, q);
@@ -391,7 +391,7 @@ TEST_CASE("Eq. R8: ABR reads the training masks widened by their undershoot only
   // Eq. R6c: a decisive vote without R6 gives the selection of a run without R6, bit for bit;
   // a split one is R6's.
   vcar::VcarParams no_r6 = p;
-  no_r6.undershoot_band = 0.f;
+  no_r6.undershoot.band = 0.f;
   const vcar::SegmentationResult g0 = full(0, p), n0 = full(0, no_r6);
   CHECK(g0.indices == n0.indices);
   CHECK(g0.scores == n0.scores);
@@ -450,7 +450,7 @@ TEST_CASE("Eq. R11: masks that overshoot the render's occlusion edges are eroded
   };
   const vcar::VcarParams robust = vcar::VcarParams::robust();
   vcar::VcarParams off = robust;
-  off.overshoot_min = 0.f;
+  off.snap.overshoot_min = 0.f;
   const vcar::SegmentationResult on_r = run(robust), off_r = run(off);
   // Without R11 the dilated masks keep the shell; with it every mask is eroded (both rounds),
   // the shell goes and blob A stays whole.
@@ -498,7 +498,7 @@ TEST_CASE("Eq. R12: coarse-round masks that stop short of the render's occlusion
   };
   const vcar::VcarParams robust = vcar::VcarParams::robust();
   vcar::VcarParams off = robust;
-  off.grow_max = 0.f;
+  off.snap.grow_max = 0.f;
   const vcar::SegmentationResult on_r = run(robust), off_r = run(off);
   CHECK(off_r.diagnostics.masks_grown == 0);
   CHECK(on_r.diagnostics.masks_grown == cams.size());  // every training mask, in the coarse round

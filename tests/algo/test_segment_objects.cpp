@@ -84,7 +84,7 @@ TEST_CASE("segment_objects: each object as its own vcar::segment run, in two seg
   const auto cams = rig();
   vcar::cpu::TiledRenderer renderer;
   vcar::VcarParams reliability = vcar::VcarParams::nvos();
-  reliability.view_reliability = true;  // R13 alone (the default has it too)
+  reliability.reliability.enabled = true;  // R13 alone (the default has it too)
   vcar::VcarParams coarse_only = reliability;  // the final scores are then the coarse round's R13 vote
   coarse_only.enable_sss = false;
   for (const vcar::VcarParams& params : {vcar::VcarParams::nvos(), vcar::VcarParams::robust(), reliability, coarse_only}) {

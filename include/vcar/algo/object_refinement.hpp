@@ -88,10 +88,10 @@ inline LogScales refine_boundaries(const GaussianScene& scene, const std::vector
 inline bool drop_coplanar_background(const GaussianScene& scene, std::vector<Index>& selected,
                                      std::vector<float>& scores, std::span<const std::uint16_t> coarse_seen,
                                      const VcarParams& params, Diagnostics& diag) {
-  if (!(params.coplanar_radius > 0.f) || coarse_seen.empty()) return true;
+  if (!(params.coplanar.radius > 0.f) || coarse_seen.empty()) return true;
   const auto tc = Clock::now();
   CoplanarParams cp;
-  cp.radius = params.coplanar_radius;
+  cp.radius = params.coplanar.radius;
   const std::vector<std::size_t> drop =
       coplanar_background(scene, selected, [&](Index i) { return coarse_seen[i] > 0; }, cp);  // Eq. R10
   std::size_t w = 0;
@@ -204,7 +204,7 @@ public:
     timing("fine_voting", voting_s);
     diag_.overshoot_eroded += fine_->overshoot_eroded();
     fine_->weigh_views(params_.tau_fine);  // Eq. R13
-    verdict_ = fine_->selected(params_.tau_fine, params_.tau_strict, split_fraction, selected_, scores_);
+    verdict_ = fine_->selected(params_.tau_fine, params_.strict.tau, split_fraction, selected_, scores_);
     diag_.tau_fine_applied = verdict_.tau;
     diag_.undershoot_applied = verdict_.undershoot;
     diag_.n_fine = diag_.n_final = selected_.size();
@@ -228,7 +228,7 @@ public:
     // Eq. R8 after a split fine vote: each training mask widened by its undershoot, and the
     // Gaussians' own footprints (no low-pass: it would widen every ellipse past masks that are
     // already too small).
-    const bool r8 = params_.undershoot_band > 0.f && params_.enable_abr && verdict_.split;
+    const bool r8 = params_.undershoot.band > 0.f && params_.enable_abr && verdict_.split;
     VcarParams abr_params = params_;
     if (r8) abr_params.abr_lowpass = false;
     if (r8)

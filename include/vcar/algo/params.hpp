@@ -72,57 +72,70 @@ struct VcarParams {
   // The released NVOS protocol re-renders the training views from G_coarse and votes them
   // again (tau_fine) even when SSS does not trigger (its force_round2). Off in the paper.
   bool force_fine_round = false;
-  // --- Beyond the paper: the robust preset (docs/robust.md), each off in the paper presets --
-  // Eq. R3: a Gaussian behind the view's rendered surface, z > (depth / alpha)(p)
-  // (1 + depth_tolerance) where alpha(p) >= 0.5, is occluded there (evidence of the lower
-  // "plain" level only, Eq. R2). Fine round: renders of G_coarse; coarse round: of the scene.
-  bool fine_occlusion = false;
-  bool coarse_occlusion = false;
-  // Eq. R2: prior weight, in views, that ties each evidence level's ratio to the level below.
-  float kappa = 2.f;
-  // The undershoot correction, Eq. R6 and R8 (one mechanism; 0 = off). R6: in the fine round,
-  // background pixels within undershoot_band e_j px of the mask are no evidence, e_j the mask's
-  // undershoot measured against the render of G_coarse (R6a); R6c: only where the vote without
-  // it is split (Eq. R7), so a decisive vote without it is the result. R8: when the fine vote is
-  // split, ABR reads each training view's mask widened by e_j, and the Gaussians' own
-  // footprints (no low-pass). Needs tau_strict for R6c and R8.
-  float undershoot_band = 0.f;
-  // Eq. R7: the fine round keeps tau_strict instead of tau_fine when the vote is decisive, i.e.
-  // when at most a fraction 0.1 (split_fraction, decisive_threshold.hpp) of the Gaussians kept
-  // at tau_fine fall below tau_strict; tau_strict <= tau_fine (0) = off.
-  float tau_strict = 0.f;
   // Eq. 9-13 read Sigma2D with the renderer's eps2d low-pass (conventions §3, true) or the
   // Gaussian's own footprint (false: overflow within ~1.6 px no longer forces f_min). Eq. R8
   // reads the own footprint after a split fine vote whatever this says.
   bool abr_lowpass = true;
+  // --- Beyond the paper: vcar's mechanisms (docs/robust.md), one group each, every one off in
+  // the paper presets. Their text keys (`--set`, JSON, Python) are flat: for_each_field below.
+  // Eq. R2-R3, the evidence levels. R3: a Gaussian behind the view's rendered surface,
+  // z > (depth / alpha)(p) (1 + depth_tolerance) where alpha(p) >= 0.5, is occluded there
+  // (evidence of the lower "plain" level only). Coarse round: renders of the scene; fine round:
+  // of G_coarse. R2: kappa, the prior weight in views that ties each level's ratio to the one
+  // below.
+  struct Evidence {
+    bool coarse_occlusion = false;
+    bool fine_occlusion = false;
+    float kappa = 2.f;
+  } evidence;
+  // Eq. R6, R6c and R8, the undershoot correction (band 0 = off). R6: in the fine round,
+  // background pixels within band e_j px of the mask are no evidence, e_j the mask's undershoot
+  // measured against the render of G_coarse (R6a); R6c: only where the vote without it is split
+  // (Eq. R7), so a decisive vote without it is the result. R8: when the fine vote is split, ABR
+  // reads each training view's mask widened by e_j, and the Gaussians' own footprints (no
+  // low-pass). R6c and R8 need R7.
+  struct Undershoot {
+    float band = 0.f;
+  } undershoot;
+  // Eq. R7, the strict threshold: the fine round keeps tau instead of tau_fine when the vote is
+  // decisive, i.e. when at most a fraction 0.1 (split_fraction, decisive_threshold.hpp) of the
+  // Gaussians kept at tau_fine fall below tau; tau <= tau_fine (0) = off.
+  struct Strict {
+    float tau = 0.f;
+  } strict;
   // Eq. R10: a fine candidate that no training view sees (the coarse round's occlusion test) is
   // background when more seen background Gaussians than seen selected ones lie on its plane
-  // within coplanar_radius D (D the selection's extent): normals within 5 degrees, plane
-  // distance within the two thicknesses (CoplanarParams). Needs coarse_occlusion; 0 = off.
-  float coplanar_radius = 0.f;
-  // Eq. R11: a view's mask whose contour lies o_j >= overshoot_min px outside the occlusion
-  // edges of the view's render (median over the contour; depth steps over depth_tolerance, the
-  // render is asked for depth) is eroded by o_j + overshoot_margin px before it is voted and
-  // kept for ABR: in the coarse round, and in the fine round once the coarse round eroded a
-  // mask; overshoot_min 0 = off.
-  float overshoot_min = 0.f;
-  float overshoot_margin = 1.5f;
-  // Eq. R11b (and R12, which reads its o_j): a contour pixel counts only when an occlusion edge
-  // lies within overshoot_reach r_M of it, r_M = sqrt(|M| / pi) the mask's radius; 0 = every
-  // contour pixel. Where the object touches a neighbour at its own depth the render has no
-  // edge, and the nearest one, far along the contour, is no evidence of where the mask ends.
-  // Off in every preset (measured, not adopted: docs/notes/default-2026-12-02.md).
-  float overshoot_reach = 0.f;
-  // Eq. R12: a coarse-round mask that R11 does not erode (o_j < overshoot_min) grows by the
-  // covered, depth-continuous pixels between its contour and the render's occlusion edges, by
-  // at most min(-o_j + grow_margin px, grow_max |image diagonal|, the mask's radius
-  // sqrt(|M| / pi)); grow_max 0 = off.
-  float grow_max = 0.f;
-  float grow_margin = 1.f;
+  // within radius D (D the selection's extent): normals within 5 degrees, plane distance within
+  // the two thicknesses (CoplanarParams). Needs evidence.coarse_occlusion; radius 0 = off.
+  struct Coplanar {
+    float radius = 0.f;
+  } coplanar;
+  // Eq. R11-R12, the snap of each mask to the occlusion edges of the view's render (depth steps
+  // over depth_tolerance; the render is asked for depth). R11: a mask whose contour lies
+  // o_j >= overshoot_min px outside those edges (median over the contour, Eq. R11b) is eroded
+  // by o_j + overshoot_margin px before it is voted and kept for ABR: in the coarse round, and in
+  // the fine round once the coarse round eroded a mask; overshoot_min 0 = off. R11b's reach: a
+  // contour pixel whose nearest edge lies inside the mask counts only within overshoot_reach
+  // r_M of it, r_M = sqrt(|M| / pi) the mask's radius (0 = every contour pixel): where the
+  // object touches a neighbour at its own depth the render has no edge there, and the nearest
+  // one, far along the contour, is no evidence of where the mask ends. A contour pixel whose
+  // nearest edge lies outside the mask (a mask that stops short) always counts. R12: a coarse-round mask
+  // that R11 does not erode (o_j < overshoot_min) grows by the covered, depth-continuous pixels
+  // between its contour and the edges, by at most min(-o_j + grow_margin px, grow_max |image
+  // diagonal|, r_M); grow_max 0 = off.
+  struct Snap {
+    float overshoot_min = 0.f;
+    float overshoot_margin = 1.5f;
+    float overshoot_reach = 0.f;
+    float grow_max = 0.f;
+    float grow_margin = 1.f;
+  } snap;
   // Eq. R13: after each round's vote, every view is weighted by how its mask agrees with the
   // round's consensus (Jaccard on the candidates it sees, unoccluded by R3 where that is on), and
   // the vote is taken again with the weights (view_reliability.hpp).
-  bool view_reliability = false;
+  struct Reliability {
+    bool enabled = false;
+  } reliability;
 
   // Paper defaults for NVOS (Sec. 4.2).
   static VcarParams nvos() { return VcarParams{}; }
@@ -157,7 +170,8 @@ struct VcarParams {
   // strict threshold 0.85 when the fine vote is decisive (R7), ABR on masks widened by their
   // undershoot when it is split, on their own footprints (R8), hidden candidates on a seen
   // background plane dropped (R10), masks that reach 1 px or more past the render's occlusion
-  // edges eroded (R11), masks that stop short of them grown to them (R12), and each view
+  // edges eroded (R11; contacts at the object's own depth, where the nearest edge lies far
+  // inside the mask, not read: reach 0.5), masks that stop short of them grown to them (R12), and each view
   // weighted by how its mask agrees with the round's consensus (R13). What vcar::segment uses
   // when given no parameters. Chosen on the field's tuning seed and the synthetic suite
   // (docs/notes/default-2026-12-02.md): fine threshold 0.7 (0.5 let GrabCut's leaks through,
@@ -166,14 +180,15 @@ struct VcarParams {
   static VcarParams robust() {
     VcarParams p;
     p.tau_fine = 0.7f;
-    p.fine_occlusion = true;
-    p.coarse_occlusion = true;
-    p.undershoot_band = 1.5f;
-    p.tau_strict = 0.85f;
-    p.coplanar_radius = 0.75f;
-    p.overshoot_min = 1.f;
-    p.grow_max = 0.1f;
-    p.view_reliability = true;
+    p.evidence.fine_occlusion = true;
+    p.evidence.coarse_occlusion = true;
+    p.undershoot.band = 1.5f;
+    p.strict.tau = 0.85f;
+    p.coplanar.radius = 0.75f;
+    p.snap.overshoot_min = 1.f;
+    p.snap.overshoot_reach = 0.5f;
+    p.snap.grow_max = 0.1f;
+    p.reliability.enabled = true;
     return p;
   }
   // A preset by name: robust, nvos, lerf, reference_code; vcar::Error otherwise.
@@ -197,9 +212,9 @@ struct VcarParams {
     return a;
   }
 
-  // True when a mechanism beyond the paper changes the vote (RobustVoting, Eq. R2-R6).
+  // True when a mechanism beyond the paper changes the vote (RobustVoting, Eq. R2-R13).
   bool robust_vote() const {
-    return fine_occlusion || coarse_occlusion || undershoot_band > 0.f || view_reliability;
+    return evidence.fine_occlusion || evidence.coarse_occlusion || undershoot.band > 0.f || reliability.enabled;
   }
 
   // Calls f(name, field) for every field, names exactly as declared (const and non-const).
@@ -218,13 +233,13 @@ struct VcarParams {
     f("background", p.background); f("abr_variant", p.abr_variant);
     f("min_frame_content", p.min_frame_content); f("min_mask_fraction", p.min_mask_fraction);
     f("force_fine_round", p.force_fine_round);
-    f("fine_occlusion", p.fine_occlusion); f("coarse_occlusion", p.coarse_occlusion); f("kappa", p.kappa);
-    f("undershoot_band", p.undershoot_band);
-    f("tau_strict", p.tau_strict); f("abr_lowpass", p.abr_lowpass);
-    f("coplanar_radius", p.coplanar_radius); f("overshoot_min", p.overshoot_min);
-    f("overshoot_margin", p.overshoot_margin); f("overshoot_reach", p.overshoot_reach);
-    f("grow_max", p.grow_max); f("grow_margin", p.grow_margin);
-    f("view_reliability", p.view_reliability);
+    f("fine_occlusion", p.evidence.fine_occlusion); f("coarse_occlusion", p.evidence.coarse_occlusion); f("kappa", p.evidence.kappa);
+    f("undershoot_band", p.undershoot.band);
+    f("tau_strict", p.strict.tau); f("abr_lowpass", p.abr_lowpass);
+    f("coplanar_radius", p.coplanar.radius); f("overshoot_min", p.snap.overshoot_min);
+    f("overshoot_margin", p.snap.overshoot_margin); f("overshoot_reach", p.snap.overshoot_reach);
+    f("grow_max", p.snap.grow_max); f("grow_margin", p.snap.grow_margin);
+    f("view_reliability", p.reliability.enabled);
   }
 
   // Throws vcar::Error naming the first parameter outside its range.
@@ -260,23 +275,23 @@ struct VcarParams {
       bad("background", "each channel must be in [0, 1]");
     unit("min_frame_content", min_frame_content);
     unit("min_mask_fraction", min_mask_fraction);
-    if (!(kappa >= 0.f && std::isfinite(kappa))) bad("kappa", "must be >= 0, got " + std::to_string(kappa));
-    if (!(undershoot_band >= 0.f && undershoot_band <= 100.f))
-      bad("undershoot_band", "must be in [0, 100] (0 = off), got " + std::to_string(undershoot_band));
-    unit("tau_strict", tau_strict);
-    if (!(coplanar_radius >= 0.f && coplanar_radius <= 10.f))
-      bad("coplanar_radius", "must be in [0, 10] (0 = off), got " + std::to_string(coplanar_radius));
-    if (coplanar_radius > 0.f && !coarse_occlusion)
+    if (!(evidence.kappa >= 0.f && std::isfinite(evidence.kappa))) bad("kappa", "must be >= 0, got " + std::to_string(evidence.kappa));
+    if (!(undershoot.band >= 0.f && undershoot.band <= 100.f))
+      bad("undershoot_band", "must be in [0, 100] (0 = off), got " + std::to_string(undershoot.band));
+    unit("tau_strict", strict.tau);
+    if (!(coplanar.radius >= 0.f && coplanar.radius <= 10.f))
+      bad("coplanar_radius", "must be in [0, 10] (0 = off), got " + std::to_string(coplanar.radius));
+    if (coplanar.radius > 0.f && !evidence.coarse_occlusion)
       bad("coplanar_radius", "Eq. R10 reads the coarse round's occlusion test: set coarse_occlusion=true or coplanar_radius=0");
-    if (!(overshoot_min >= 0.f && overshoot_min <= 100.f))
-      bad("overshoot_min", "must be in [0, 100] px (0 = off), got " + std::to_string(overshoot_min));
-    if (!(overshoot_margin >= 0.f && overshoot_margin <= 100.f))
-      bad("overshoot_margin", "must be in [0, 100] px, got " + std::to_string(overshoot_margin));
-    if (!(overshoot_reach >= 0.f && overshoot_reach <= 10.f))
-      bad("overshoot_reach", "must be in [0, 10] mask radii (0 = unlimited), got " + std::to_string(overshoot_reach));
-    unit("grow_max", grow_max);
-    if (!(grow_margin >= 0.f && grow_margin <= 100.f))
-      bad("grow_margin", "must be in [0, 100] px, got " + std::to_string(grow_margin));
+    if (!(snap.overshoot_min >= 0.f && snap.overshoot_min <= 100.f))
+      bad("overshoot_min", "must be in [0, 100] px (0 = off), got " + std::to_string(snap.overshoot_min));
+    if (!(snap.overshoot_margin >= 0.f && snap.overshoot_margin <= 100.f))
+      bad("overshoot_margin", "must be in [0, 100] px, got " + std::to_string(snap.overshoot_margin));
+    if (!(snap.overshoot_reach >= 0.f && snap.overshoot_reach <= 10.f))
+      bad("overshoot_reach", "must be in [0, 10] mask radii (0 = unlimited), got " + std::to_string(snap.overshoot_reach));
+    unit("grow_max", snap.grow_max);
+    if (!(snap.grow_margin >= 0.f && snap.grow_margin <= 100.f))
+      bad("grow_margin", "must be in [0, 100] px, got " + std::to_string(snap.grow_margin));
   }
 
 };

@@ -38,11 +38,11 @@ struct FineVerdict {
 class RoundVote {
 public:
   RoundVote(const GaussianScene& scene, const std::vector<Index>* candidates, const VcarParams& p, bool fine)
-      : occlusion_(p.occlusion_aware || (fine ? p.fine_occlusion : p.coarse_occlusion)),
-        overshoot_(p.overshoot_min > 0.f), grow_(!fine && p.grow_max > 0.f), undershoot_(fine && p.undershoot_band > 0.f) {
+      : occlusion_(p.occlusion_aware || (fine ? p.evidence.fine_occlusion : p.evidence.coarse_occlusion)),
+        overshoot_(p.snap.overshoot_min > 0.f), grow_(!fine && p.snap.grow_max > 0.f), undershoot_(fine && p.undershoot.band > 0.f) {
     if (p.robust_vote()) {
       // Eq. R6 needs frames rendered from the candidates alone: the fine round's.
-      const RobustVoteOptions o{p.kappa, undershoot_ ? p.undershoot_band : 0.f, p.view_reliability};
+      const RobustVoteOptions o{p.evidence.kappa, undershoot_ ? p.undershoot.band : 0.f, p.reliability.enabled};
       if (candidates) robust_.emplace(scene, *candidates, o);
       else robust_.emplace(scene, o);
     } else if (candidates) {
@@ -136,16 +136,16 @@ inline const Mask* edit_mask(const Mask& m, const RenderOutput& render, bool ove
     return static_cast<std::size_t>(std::count_if(x.data.begin(), x.data.end(), [](std::uint8_t v) { return v != 0; }));
   };
   const std::vector<std::uint8_t> edges = occlusion_edges(render.alpha, render.depth, params.depth_tolerance);  // Eq. R11a
-  const double o = overshoot_px(m, edges, overshoot_reach_px(foreground(m), params.overshoot_reach));  // Eq. R11b
-  if (overshoot && o >= static_cast<double>(params.overshoot_min)) {
+  const double o = overshoot_px(m, edges, overshoot_reach_px(foreground(m), params.snap.overshoot_reach));  // Eq. R11b
+  if (overshoot && o >= static_cast<double>(params.snap.overshoot_min)) {
     scratch = m;
-    erode_by_overshoot(scratch, o + static_cast<double>(params.overshoot_margin));  // Eq. R11c
+    erode_by_overshoot(scratch, o + static_cast<double>(params.snap.overshoot_margin));  // Eq. R11c
     if (4 * foreground(scratch) < foreground(m)) return &m;  // thin or scattered masks are kept as they are
     edit = MaskEdit::eroded;
     return &scratch;
   }
-  if (grow && o < static_cast<double>(params.overshoot_min)) {
-    const int reach_px = growth_reach(o, foreground(m), m.width, m.height, params.grow_max, params.grow_margin);  // Eq. R12c
+  if (grow && o < static_cast<double>(params.snap.overshoot_min)) {
+    const int reach_px = growth_reach(o, foreground(m), m.width, m.height, params.snap.grow_max, params.snap.grow_margin);  // Eq. R12c
     scratch = m;
     if (grow_to_occlusion_edges(scratch, edges, render.alpha, render.depth, params.depth_tolerance, reach_px) > 0) {
       edit = MaskEdit::grown;  // Eq. R12b
