@@ -50,7 +50,9 @@
 // released code's constants and rules, conventions §7), vcar:lean (issue 47's candidate default:
 // the paper's preset plus the occlusion test and view reliability, docs/notes/
 // field-probes-2026-12-02.md), and the peers (evidence/methods.hpp), which take the coarse
-// round's training masks.
+// round's training masks. An ablation row: vcar:robust@KEY=VALUE[+KEY=VALUE...], the default with
+// those parameters changed (text keys as --set; e.g. vcar:robust@overshoot_min=0 is the default
+// without R11), its CSV variant the text after "vcar:".
 //
 // Cost: the coarse round's training masks (frames rendering the whole scene) are the same for
 // every method of a (seed, target, rig, segmenter): they are computed once, and VCAR's coarse
@@ -397,7 +399,7 @@ std::vector<Cell> plan_cells(const Options& o) {
       throw Error("unknown rig '" + c.rig + "' (forward, orbit)", "--rigs");
     const std::vector<std::string> known = all_methods();
     for (const auto& m : c.methods)
-      if (std::find(known.begin(), known.end(), m) == known.end())
+      if (m.rfind("vcar:robust@", 0) != 0 && std::find(known.begin(), known.end(), m) == known.end())
         throw Error("unknown method '" + m + "' (vcar:paper, vcar:robust, vcar:code, vcar:lean, naive, sagd, flashsplat, gaussiancut, ludvig, lbg)", "--methods");
   }
   return cells;
@@ -672,9 +674,16 @@ private:
         if (r.variant == "paper") {
           p = evidence::is_360(k.rig_name) ? VcarParams::lerf() : VcarParams::nvos();
           r.preset = evidence::is_360(k.rig_name) ? "lerf" : "nvos";
-        } else if (r.variant == "robust") {
+        } else if (r.variant == "robust" || r.variant.rfind("robust@", 0) == 0) {
           p = VcarParams::robust();
           for (const std::string& kv : opt_.set) io::set_parameter(p, kv);
+          // An ablation row: robust@k=v+k=v, applied after --set.
+          for (std::size_t b = r.variant.find('@'); b != std::string::npos;) {
+            const std::size_t e = r.variant.find('+', b + 1);
+            io::set_parameter(p, r.variant.substr(b + 1, e == std::string::npos ? std::string::npos : e - b - 1));
+            b = e;
+          }
+          p.validate();
           r.preset = "robust";
         } else if (r.variant == "code") {
           p = VcarParams::reference_code();
