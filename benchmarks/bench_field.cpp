@@ -683,7 +683,6 @@ private:
             io::set_parameter(p, r.variant.substr(b + 1, e == std::string::npos ? std::string::npos : e - b - 1));
             b = e;
           }
-          p.validate();
           r.preset = "robust";
         } else if (r.variant == "code") {
           p = VcarParams::reference_code();

@@ -25,8 +25,9 @@
 // so those pixels are left out. A contour pixel whose nearest edge lies outside the mask (a mask
 // that stops short of the render's edge) always counts: limiting those too (|s(c)| <= r r_M)
 // read a GrabCut mask that stops short on a small donut as overshooting (3D F1 0.921 -> 0.712).
-// robust: r = 0.5 (nine trained donuts 1 cm apart, exact masks: 3D F1 0.851 -> 0.938;
-// docs/notes/default-2026-12-02.md).
+// Off in every preset (r = 0): r = 0.5 takes nine trained donuts 1 cm apart with exact masks
+// from 3D F1 0.851 to 0.938, but a held-out GrabCut donut (stage seed 13, the CLI's rig) from
+// 0.931 to 0.446 (docs/notes/default-2026-12-02.md).
 // (Euclidean distances between pixel centres). A mask on the object's true edge gives o_j < 0:
 // the render's edge lies outside the true silhouette by the splats' own extent, measured 1-5 px
 // at 160 x 120 and 7-10 px at 640 x 480 (median over a round's views); a mask eroded by e px
@@ -112,7 +113,8 @@ inline double overshoot_reach_px(std::size_t foreground, double r) {
 }
 
 // Eq. R11b: the overshoot o_j of mask m (px; > 0: its contour lies outside the render's
-// occlusion edges `edge`, Eq. R11a), read on the contour pixels with an edge within `reach` px.
+// occlusion edges `edge`, Eq. R11a), read on the contour pixels whose nearest edge lies outside the
+// mask, or inside it within `reach` px.
 // 0 when no contour pixel has one (no contour, no edge, or none near).
 inline double overshoot_px(const Mask& m, const std::vector<std::uint8_t>& edge,
                            double reach = std::numeric_limits<double>::infinity()) {

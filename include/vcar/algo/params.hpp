@@ -170,8 +170,8 @@ struct VcarParams {
   // strict threshold 0.85 when the fine vote is decisive (R7), ABR on masks widened by their
   // undershoot when it is split, on their own footprints (R8), hidden candidates on a seen
   // background plane dropped (R10), masks that reach 1 px or more past the render's occlusion
-  // edges eroded (R11; contacts at the object's own depth, where the nearest edge lies far
-  // inside the mask, not read: reach 0.5), masks that stop short of them grown to them (R12), and each view
+  // edges eroded (R11; R11b's reach is off: measured, not adopted, docs/robust.md), masks that
+  // stop short of them grown to them (R12), and each view
   // weighted by how its mask agrees with the round's consensus (R13). What vcar::segment uses
   // when given no parameters. Chosen on the field's tuning seed and the synthetic suite
   // (docs/notes/default-2026-12-02.md): fine threshold 0.7 (0.5 let GrabCut's leaks through,
@@ -186,7 +186,6 @@ struct VcarParams {
     p.strict.tau = 0.85f;
     p.coplanar.radius = 0.75f;
     p.snap.overshoot_min = 1.f;
-    p.snap.overshoot_reach = 0.5f;
     p.snap.grow_max = 0.1f;
     p.reliability.enabled = true;
     return p;
