@@ -116,6 +116,21 @@ int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
   // its alpha (the photograph's: 1 everywhere) is no surface test. GrabCut cannot do without
   // the boxes; an external program got the prompt before "boxes" existed, so there a prompt
   // that cannot be lifted only costs the boxes.
+  // GrabCut with points alone: the box around the clicked object, found by GrabCut itself on
+  // the prompt view (algo/click_box.hpp), is lifted instead of the points' neighbourhood.
+  const std::optional<Eigen::Vector4f> user_box = prompt.box;
+  std::optional<Eigen::Vector4f> click_box;
+  if (grabcut && !prompt.box) {
+    if constexpr (has_grabcut()) {  // grabcut_click_box exists only in builds with OpenCV
+      progress.message("finding the clicked object's box");
+      const RenderOutput view = photos ? detail::render_view(*photos, scene, ref, nullptr, params.background)
+                                       : detail::render_view(cpu_renderer, scene, ref, nullptr, params.background);
+      click_box = grabcut_click_box(to_8bit(view.rgb), prompt);
+      progress.done();
+      if (click_box) prompt.box = click_box;
+      else warn("--points: GrabCut found no object at the point: its neighbourhood is lifted");
+    }
+  }
   std::optional<LiftedPrompt> lifted;
   if ((grabcut || external) && liftable) {
     progress.message("lifting the prompt");
@@ -139,7 +154,8 @@ int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
   nlohmann::json pj = {{"points", nlohmann::json::array()}, {"point_labels", prompt.point_labels},
                        {"text", prompt.text}};
   for (const auto& p : prompt.points) pj["points"].push_back({p.x(), p.y()});
-  if (prompt.box) pj["box"] = {(*prompt.box)[0], (*prompt.box)[1], (*prompt.box)[2], (*prompt.box)[3]};
+  if (user_box) pj["box"] = {(*user_box)[0], (*user_box)[1], (*user_box)[2], (*user_box)[3]};
+  if (click_box) pj["click_box"] = {(*click_box)[0], (*click_box)[1], (*click_box)[2], (*click_box)[3]};
   if (lifted) pj["lifted_gaussians"] = lifted->indices.size();
   inputs["prompt"] = pj;
 

@@ -3,9 +3,13 @@
 // lifted to 3D. Defined in cmd_segment_grabcut.cpp, the one translation unit that includes
 // OpenCV, compiled only where OpenCV was found (VCAR_CLI_HAS_OPENCV).
 #include <functional>
+#include <optional>
+
+#include <Eigen/Core>
 
 #include "vcar/algo/prompt_lift.hpp"
 #include "vcar/concepts/segmenter.hpp"
+#include "vcar/core/image.hpp"
 
 namespace vcar::cli {
 
@@ -21,5 +25,10 @@ constexpr bool has_grabcut() {
 // A segmenter (through make_streaming_segmenter) running vcar::opencv::GrabCutSegmenter on `lifted`.
 using SegmentFunction = std::function<void(const FrameSequence&, const Prompt&, const MaskSink&)>;
 SegmentFunction make_grabcut_segmenter(LiftedPrompt lifted);
+
+// The box of a points-only prompt on the prompt view's `image`: vcar::box_from_click with GrabCut
+// (seeded by the prompt's points, as on frame 0) from its first positive point; nullopt when
+// GrabCut finds no object there.
+std::optional<Eigen::Vector4f> grabcut_click_box(const ImageRGB8& image, const Prompt& prompt);
 
 }  // namespace vcar::cli

@@ -182,6 +182,7 @@ private:
     if (!options["orbitViews"].isUndefined()) opt.orbit_views = options["orbitViews"].as<int>();
     if (!options["colourTol"].isUndefined()) opt.grow.colour_tol = options["colourTol"].as<float>();
     if (!options["depthStep"].isUndefined()) opt.grow.depth_step = options["depthStep"].as<float>();
+    if (!options["clickBox"].isUndefined()) opt.click_box = options["clickBox"].as<bool>();
     opt.box = box_of(options["box"], "options.box");
     return opt;
   }

@@ -2,10 +2,12 @@
 // build, for the browser test (same selection?) and the browser-vs-native benchmark.
 //   vcar_web_native --scene FILE [--cameras FILE] [--view NAME] (--click U,V | --box X0,Y0,X1,Y1 | both
 //                   | --objects U,V;U,V;...) [--segmenter region|grabcut] [--max-side N] [--orbit-views N]
-//                   [--out result.json]
+//                   [--grabcut-context C] [--click-box on|off] [--out result.json]
 // --segmenter grabcut (where OpenCV is found): vcar::opencv::grabcut on each frame's box, what
 // the page's grabcut.js does with OpenCV's WebAssembly build; region (the default here): vcar's
-// colour + depth region growing, as the page's fallback.
+// colour + depth region growing, as the page's fallback. --grabcut-context: GrabCutParams::context
+// (the page's vcarGrabCutParams.context; negative: the whole frame). --click-box off: a click lifts
+// its neighbourhood (SegmentOptions::click_box; the page's clickBox=off).
 //   vcar_web_native --convert IN OUT      (any scene format -> .ply / .splat / .spz by OUT's
 //                                          extension: inputs for the browser format tests)
 // Prints (and writes to --out) {"selected": n, "seconds": t, "indices": [...], "split": {...}}:
@@ -38,6 +40,7 @@ std::vector<std::uint8_t> slurp(const std::string& p) {
 int main(int argc, char** argv) {
   std::string scene, cameras, view, click, box, objects, segmenter = "region", out;
   vcar::web::SegmentOptions opt;
+  float grabcut_context = vcar::web::grabcut_context;
   if (argc == 4 && std::string(argv[1]) == "--convert") {
     try {
       vcar::io::write_scene(argv[3], vcar::io::read_scene(argv[2]));
@@ -63,6 +66,8 @@ int main(int argc, char** argv) {
     else if (a == "--out") out = next();
     else if (a == "--max-side") opt.max_side = std::stoi(next());
     else if (a == "--orbit-views") opt.orbit_views = std::stoi(next());
+    else if (a == "--grabcut-context") grabcut_context = std::stof(next());
+    else if (a == "--click-box") opt.click_box = next() != "off";
     else { std::cerr << "unknown argument " << a << "\n"; return 2; }
   }
   if (scene.empty() || (click.empty() && box.empty() && objects.empty()) || (segmenter != "region" && segmenter != "grabcut")) {
@@ -86,10 +91,11 @@ int main(int argc, char** argv) {
     vcar::web::FrameMaskFn custom;
     if (segmenter == "grabcut") {
 #ifdef VCAR_WEB_NATIVE_HAS_OPENCV
-      custom = [](std::size_t k, const vcar::Camera& cam, const vcar::ImageRGB8& rgb, const vcar::Prompt& p, bool,
-                  const vcar::web::FrameBox& b) -> std::optional<vcar::Mask> {
+      custom = [grabcut_context](std::size_t k, const vcar::Camera& cam, const vcar::ImageRGB8& rgb, const vcar::Prompt& p, bool,
+                                 const vcar::web::FrameBox& b) -> std::optional<vcar::Mask> {
         if (!b) return std::nullopt;
-        const vcar::opencv::GrabCutParams params;
+        vcar::opencv::GrabCutParams params;
+        params.context = grabcut_context;
         std::vector<vcar::opencv::GrabCutSeed> seeds;
         if (k == 0)
           for (const Eigen::Vector2f& q : p.points) seeds.push_back({q, true});

@@ -13,6 +13,9 @@
 namespace vcar::web {
 
 inline constexpr int default_view_width = 640, default_view_height = 480;
+// The page's GrabCut crop (grabcut.js vcarGrabCutParams.context, GrabCutParams::context): the
+// box padded by this share of its size each side; negative: the whole frame.
+inline constexpr float grabcut_context = -1.f;
 
 inline Camera reference_view(const Session& s, const std::string& view) {
   if (s.cameras().empty()) {

@@ -28,6 +28,7 @@
 #include <Eigen/Core>
 
 #include "region_grow_segmenter.hpp"
+#include "vcar/algo/click_box.hpp"
 #include "vcar/algo/pipeline.hpp"
 #include "vcar/algo/prompt_lift.hpp"
 #include "vcar/algo/segment_objects.hpp"
@@ -70,7 +71,11 @@ struct SegmentOptions {
   // the region-growing one needs the click.
   std::optional<Eigen::Vector4f> box;
   float box_margin = 0.1f;    // lifted boxes padded by this share of their size (a box prompt)
-  float point_margin = 0.5f;  // the same for a click (it lifts part of the object)
+  float point_margin = 0.5f;  // the same for a click without click_box (it lifts part of the object)
+  // A click alone (no box) becomes a box on the reference view found by the host's segmenter
+  // itself (vcar::box_from_click, algo/click_box.hpp), lifted like a box prompt; false: the
+  // click's neighbourhood is lifted (boxes of part of the object, padded by point_margin).
+  bool click_box = true;
 };
 
 // The host's FrameMaskFn as a Segmenter: each frame asked with the prompt's box in it, the
@@ -176,7 +181,7 @@ public:
   // No click (u or v not finite): options.box alone is the prompt.
   const SegmentationResult& segment(const Camera& reference, float u, float v, const SegmentOptions& options = {},
                                     const ProgressCallback& progress = {}, const FrameMaskFn& custom = {}) {
-    const Setup setup = prepare(reference, {ObjectClick{u, v, options.box, {}}}, options, !custom);
+    Setup setup = prepare(reference, {ObjectClick{u, v, options.box, {}}}, options, !custom);
     objects_.reset();
     if (custom) {
       auto host = host_segmenter(setup, 0, options, custom);
@@ -196,18 +201,19 @@ public:
                                            const SegmentOptions& options = {}, const ProgressCallback& progress = {},
                                            const ObjectFrameMaskFn& custom = {}) {
     if (objects.empty()) throw Error("no object: give at least one click or box", "prompt");
-    const Setup setup = prepare(reference, objects, options, !custom);
+    Setup setup = prepare(reference, objects, options, !custom);
     result_.reset();
-    std::vector<ObjectPrompt> prompts;
-    for (std::size_t o = 0; o < objects.size(); ++o)
-      prompts.push_back({objects[o].name.empty() ? "object_" + std::to_string(o) : objects[o].name, setup.prompts[o], -1});
-    if (custom) {
-      std::vector<HostSegmenter> hosts;
+    std::vector<HostSegmenter> hosts;
+    if (custom)  // first: a click's box (host_segmenter) is part of the object's prompt
       for (std::size_t o = 0; o < objects.size(); ++o)
         hosts.push_back(host_segmenter(setup, o, options, [&custom, o](std::size_t k, const Camera& c, const ImageRGB8& im,
                                                                       const Prompt& p, bool subset, const FrameBox& b) {
           return custom(o, k, c, im, p, subset, b);
         }));
+    std::vector<ObjectPrompt> prompts;
+    for (std::size_t o = 0; o < objects.size(); ++o)
+      prompts.push_back({objects[o].name.empty() ? "object_" + std::to_string(o) : objects[o].name, setup.prompts[o], -1});
+    if (custom) {
       EachObject<HostSegmenter> each{std::span<HostSegmenter>(hosts)};
       objects_ = vcar::segment_objects(scene_, views_, prompts, *setup.renderer, each, VcarParams::robust(), progress);
     } else {
@@ -312,9 +318,20 @@ private:
     return st;
   }
 
-  // The host's segmenter for object `o`: its prompt lifted to 3D on the reference view.
-  HostSegmenter host_segmenter(const Setup& st, std::size_t o, const SegmentOptions& options, FrameMaskFn custom) const {
-    HostSegmenter h{std::nullopt, st.prompts[o].box ? options.box_margin : options.point_margin, std::move(custom)};
+  // The host's segmenter for object `o`: its prompt lifted to 3D on the reference view. A click
+  // alone gets its box first (options.click_box): the host's segmenter on the reference view's
+  // render, asked by vcar::box_from_click; the box joins the object's prompt in `st`.
+  HostSegmenter host_segmenter(Setup& st, std::size_t o, const SegmentOptions& options, FrameMaskFn custom) const {
+    Prompt& prompt = st.prompts[o];
+    if (options.click_box && !prompt.box && !prompt.points.empty()) {
+      const ImageRGB8 image = to_8bit(detail::render_view(*st.base, scene_, st.ref, nullptr, VcarParams::robust().background).rgb);
+      const std::optional<ClickBox> found = box_from_click(
+          [&](const Eigen::Vector4f& b) { return custom(0, st.ref, image, prompt, false, FrameBox(b)); },
+          prompt.points.front(), st.ref.width, st.ref.height);
+      if (found) prompt.box = found->box;
+      else std::fprintf(stderr, "vcar: warning: the segmenter found no object at the click: its neighbourhood is lifted\n");
+    }
+    HostSegmenter h{std::nullopt, prompt.box ? options.box_margin : options.point_margin, std::move(custom)};
     try {
       h.lifted = lift_prompt(scene_, st.ref, st.prompts[o], *st.base);
     } catch (const Error& e) {

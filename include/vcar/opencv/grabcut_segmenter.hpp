@@ -13,7 +13,8 @@
 //    object behind the camera or out of view), a box under min_box_px on a side, or one that
 //    leaves less than min_background of the frame outside it (nothing to learn the background
 //    from): "no mask", sink(k, nullptr), and the frame is never rendered;
-//  - the image: frames.image(k) (8-bit RGB), as a BGR cv::Mat;
+//  - the image: frames.image(k) (8-bit RGB), as a BGR cv::Mat, cropped around the box when
+//    `context` >= 0 (the rest of the frame: background);
 //  - cv::grabCut with GC_INIT_WITH_RECT, `iterations` rounds; on frame 0, prompt points seed
 //    discs of seed_radius * (image diagonal): positive GC_FGD, negative GC_BGD (the box's
 //    initial labels otherwise: GC_BGD outside, GC_PR_FGD inside; GC_INIT_WITH_MASK then);
@@ -56,6 +57,10 @@ struct GrabCutParams {
   float min_background = 0.01f;  // a box leaving less of the frame than this outside gives no mask
   float min_foreground = 0.05f;  // a mask with less foreground than this share of its box is no mask
   std::uint64_t seed = 0x6C8E9CF5u;  // OpenCV's RNG state before each frame
+  // GrabCut sees the frame cropped to the box padded by ceil(context * its width) columns and
+  // ceil(context * its height) rows each side (clipped; the rest of the frame is background);
+  // negative: the whole frame. Its cost grows with the pixels it models.
+  float context = -1.f;
 
   void validate() const {
     if (iterations < 1) throw Error("must be >= 1", "GrabCutParams.iterations");
@@ -66,6 +71,7 @@ struct GrabCutParams {
     if (!(seed_radius >= 0.f && seed_radius <= 1.f)) throw Error("must be in [0, 1]", "GrabCutParams.seed_radius");
     if (min_box_px < 1) throw Error("must be >= 1", "GrabCutParams.min_box_px");
     if (!(min_background >= 0.f && min_background < 1.f)) throw Error("must be in [0, 1)", "GrabCutParams.min_background");
+    if (std::isnan(context)) throw Error("must be a number", "GrabCutParams.context");
   }
 };
 
@@ -94,31 +100,41 @@ inline std::optional<Mask> grabcut(const ImageRGB8& image, const Eigen::Vector4f
   const double outside = 1.0 - static_cast<double>(x1 - x0) * (y1 - y0) / (static_cast<double>(W) * H);
   if (outside < params.min_background || (x1 - x0 == W && y1 - y0 == H)) return std::nullopt;
   const cv::Rect rect(x0, y0, x1 - x0, y1 - y0);
+  // The crop GrabCut sees (params.context), in frame pixels.
+  cv::Rect crop(0, 0, W, H);
+  if (params.context >= 0.f) {
+    const int px = static_cast<int>(std::ceil(static_cast<double>(params.context) * (x1 - x0)));
+    const int py = static_cast<int>(std::ceil(static_cast<double>(params.context) * (y1 - y0)));
+    const int c0 = std::max(0, x0 - px), r0 = std::max(0, y0 - py);
+    crop = cv::Rect(c0, r0, std::min(W, x1 + px) - c0, std::min(H, y1 + py) - r0);
+    if (crop == rect) crop = cv::Rect(0, 0, W, H);  // no background in the crop: the whole frame
+  }
+  const cv::Rect in_crop(rect.x - crop.x, rect.y - crop.y, rect.width, rect.height);
 
   try {
     const cv::Mat rgb(H, W, CV_8UC3, const_cast<std::uint8_t*>(image.data.data()));
     cv::Mat bgr;
-    cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-    cv::Mat labels(H, W, CV_8UC1, cv::Scalar(cv::GC_BGD));
+    cv::cvtColor(rgb(crop), bgr, cv::COLOR_RGB2BGR);
+    cv::Mat labels(crop.height, crop.width, CV_8UC1, cv::Scalar(cv::GC_BGD));
     cv::Mat bgd_model, fgd_model;
     cv::theRNG().state = params.seed;  // k-means initialisation of the GMMs: the same per frame
     if (seeds.empty()) {
-      cv::grabCut(bgr, labels, rect, bgd_model, fgd_model, params.iterations, cv::GC_INIT_WITH_RECT);
+      cv::grabCut(bgr, labels, in_crop, bgd_model, fgd_model, params.iterations, cv::GC_INIT_WITH_RECT);
     } else {
-      labels(rect).setTo(cv::Scalar(cv::GC_PR_FGD));  // what GC_INIT_WITH_RECT would set
+      labels(in_crop).setTo(cv::Scalar(cv::GC_PR_FGD));  // what GC_INIT_WITH_RECT would set
       const int r = std::max(0, static_cast<int>(std::lround(seed_radius_px)));
       for (const GrabCutSeed& s : seeds)
-        cv::circle(labels, cv::Point(static_cast<int>(s.pixel.x()), static_cast<int>(s.pixel.y())), r,
+        cv::circle(labels, cv::Point(static_cast<int>(s.pixel.x()) - crop.x, static_cast<int>(s.pixel.y()) - crop.y), r,
                    cv::Scalar(s.foreground ? cv::GC_FGD : cv::GC_BGD), cv::FILLED);
-      cv::grabCut(bgr, labels, rect, bgd_model, fgd_model, params.iterations, cv::GC_INIT_WITH_MASK);
+      cv::grabCut(bgr, labels, in_crop, bgd_model, fgd_model, params.iterations, cv::GC_INIT_WITH_MASK);
     }
     Mask m(W, H, 1);
     std::size_t foreground = 0;
-    for (int i = 0; i < H; ++i) {
+    for (int i = 0; i < crop.height; ++i) {
       const std::uint8_t* row = labels.ptr<std::uint8_t>(i);
-      for (int j = 0; j < W; ++j) {
+      for (int j = 0; j < crop.width; ++j) {
         const bool fg = (row[j] & 1) != 0;  // GC_FGD = 1, GC_PR_FGD = 3
-        m.data[static_cast<std::size_t>(i) * W + j] = fg ? 255 : 0;
+        m.data[static_cast<std::size_t>(i + crop.y) * W + j + crop.x] = fg ? 255 : 0;
         foreground += fg;
       }
     }
