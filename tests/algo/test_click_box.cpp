@@ -55,7 +55,6 @@ TEST_CASE("box_from_click grows a box around the click until the object lies ins
     RectSegmenter seg{200, 100, {{60, 20, 120, 70}}, inside_empty};
     const auto got = vcar::box_from_click(std::ref(seg), Eigen::Vector2f(90.f, 45.f), 200, 100);
     REQUIRE(got);
-    CHECK(got->enclosed);
     CHECK(got->rounds == seg.calls);
     CHECK(got->rounds >= 3);  // 22 px, then 45, then 89 wide: the object (60 x 50) needs three
     CHECK(got->rounds <= vcar::ClickBoxParams{}.rounds);
@@ -70,12 +69,48 @@ TEST_CASE("box_from_click grows a box around the click until the object lies ins
   check_box(*padded, 54.f, 15.f, 126.f, 75.f);
 }
 
+TEST_CASE("box_from_click grows past a small patch found inside the object", "[click_box]") {
+  // GrabCut in a box inside an object answers a patch of it (the object's colours outside the
+  // box model the background): here a 6 x 6 patch at the click while the box lies inside the
+  // object [60, 120) x [20, 70), the object's pixels in the box otherwise. The patch fills
+  // 36 / 22.4^2 = 0.07 of the first box, under min_fill (0.25): the box grows, and the answer is
+  // the object's box.
+  int calls = 0;
+  const vcar::Mask object = [] {
+    vcar::Mask m(200, 100, 1);
+    for (int y = 20; y < 70; ++y)
+      for (int x = 60; x < 120; ++x) m(x, y) = 255;
+    return m;
+  }();
+  auto patch_inside = [&](const Eigen::Vector4f& b) {
+    ++calls;
+    vcar::Mask m(200, 100, 1);
+    const bool inside = b[0] >= 60.f && b[1] >= 20.f && b[2] <= 120.f && b[3] <= 70.f;
+    for (int y = 0; y < 100; ++y)
+      for (int x = 0; x < 200; ++x) {
+        const bool in_box = x + 1 > b[0] && x < b[2] && y + 1 > b[1] && y < b[3];
+        if (inside) m(x, y) = (x >= 87 && x < 93 && y >= 42 && y < 48) ? 255 : 0;
+        else m(x, y) = in_box ? object(x, y) : 0;
+      }
+    return std::optional<vcar::Mask>(m);
+  };
+  const auto got = vcar::box_from_click(patch_inside, Eigen::Vector2f(90.f, 45.f), 200, 100);
+  REQUIRE(got);
+  CHECK(got->rounds == calls);
+  check_box(*got, 60.f, 20.f, 120.f, 70.f);
+  // Without the fill test the patch is the answer.
+  vcar::ClickBoxParams p;
+  p.min_fill = 0.f;
+  const auto part = vcar::box_from_click(patch_inside, Eigen::Vector2f(90.f, 45.f), 200, 100, p);
+  REQUIRE(part);
+  check_box(*part, 87.f, 42.f, 93.f, 48.f);
+}
+
 TEST_CASE("box_from_click keeps the clicked object's component, not its neighbour's", "[click_box]") {
   // Two objects in a row: A [20, 60) x [20, 60) (clicked) and B [62, 150) x [20, 60), 2 px apart.
   RectSegmenter seg{200, 100, {{20, 20, 60, 60}, {62, 20, 150, 60}}};
   const auto got = vcar::box_from_click(std::ref(seg), Eigen::Vector2f(40.f, 40.f), 200, 100);
   REQUIRE(got);
-  CHECK(got->enclosed);
   check_box(*got, 20.f, 20.f, 60.f, 60.f);  // A's box, B left out
 }
 
@@ -85,18 +120,17 @@ TEST_CASE("box_from_click does not grow past the image's edges", "[click_box]") 
   RectSegmenter seg{200, 100, {{0, 0, 50, 100}}};
   const auto got = vcar::box_from_click(std::ref(seg), Eigen::Vector2f(25.f, 50.f), 200, 100);
   REQUIRE(got);
-  CHECK(got->enclosed);
   check_box(*got, 0.f, 0.f, 50.f, 100.f);
 }
 
-TEST_CASE("box_from_click: the best effort when the object is as large as the view", "[click_box]") {
-  // The object covers everything but a 1-px frame: the box grows to the whole image, where no
-  // side counts as touched (they are the image's edges).
+TEST_CASE("box_from_click: nothing when the segmenter never separates the object", "[click_box]") {
+  // The object covers everything but a 1-px frame: the box grows to the whole image, which
+  // leaves nothing outside to tell the object from. So does a segmenter that fills any box.
   RectSegmenter seg{64, 48, {{1, 1, 63, 47}}};
-  const auto got = vcar::box_from_click(std::ref(seg), Eigen::Vector2f(32.f, 24.f), 64, 48);
-  REQUIRE(got);
-  CHECK(got->enclosed);
-  check_box(*got, 1.f, 1.f, 63.f, 47.f);
+  CHECK_FALSE(vcar::box_from_click(std::ref(seg), Eigen::Vector2f(32.f, 24.f), 64, 48));
+  RectSegmenter fills{64, 48, {{0, 0, 64, 48}}};
+  CHECK_FALSE(vcar::box_from_click(std::ref(fills), Eigen::Vector2f(32.f, 24.f), 64, 48));
+  CHECK(fills.calls >= 2);
 
   // A segmenter that never finds the object at the click (its object lies far from it): nothing,
   // after the box filled the image.
@@ -117,7 +151,6 @@ TEST_CASE("box_from_click: a click next to the object finds it within the first 
   RectSegmenter seg{200, 100, {{60, 20, 120, 70}}};
   const auto got = vcar::box_from_click(std::ref(seg), Eigen::Vector2f(55.f, 45.f), 200, 100);
   REQUIRE(got);
-  CHECK(got->enclosed);
   check_box(*got, 60.f, 20.f, 120.f, 70.f);
 }
 

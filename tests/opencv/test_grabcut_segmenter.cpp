@@ -122,6 +122,37 @@ TEST_CASE("grabcut: a disc in its box; seeds; degenerate boxes give no mask") {
   CHECK_THROWS_WITH(GrabCutSegmenter(vcar::LiftedPrompt{}), Catch::Contains("no point"));
 }
 
+TEST_CASE("grabcut: context crops the frame around the box; the rest is background") {
+  // A red disc in the middle and a second one of the same colour far from the box: the crop
+  // (the box padded by its size each side) leaves the far disc out of the background model.
+  const Discs d = discs({{{60.f, 45.f, 12.f}, {220, 60, 40}}, {{108.f, 12.f, 8.f}, {220, 60, 40}}});
+  const Eigen::Vector4f box(44.f, 29.f, 76.f, 61.f);  // 32 x 32 around the first disc
+  vcar::opencv::GrabCutParams whole, crop, wide;
+  crop.context = 0.5f;  // 16 px each side: columns 28..91, rows 13..76
+  wide.context = 10.f;  // larger than the frame: the whole frame, the same as no crop
+  const auto m_whole = vcar::opencv::grabcut(d.image, box, whole);
+  const auto m_crop = vcar::opencv::grabcut(d.image, box, crop);
+  const auto m_wide = vcar::opencv::grabcut(d.image, box, wide);
+  REQUIRE((m_whole && m_crop && m_wide));
+  CHECK(m_wide->data == m_whole->data);
+  CHECK(iou(*m_crop, d.masks[0]) > 0.9);  // an easy disc: the crop finds it too
+  for (int i = 0; i < 90; ++i)
+    for (int j = 0; j < 120; ++j)
+      if ((*m_crop)(j, i)) CHECK((j >= 28 && j < 92 && i >= 13 && i < 77));  // nothing outside the crop
+  // Context 0 would crop to the box itself, with no background to learn from: the whole frame.
+  vcar::opencv::GrabCutParams zero;
+  zero.context = 0.f;
+  const auto m_zero = vcar::opencv::grabcut(d.image, box, zero);
+  REQUIRE(m_zero);
+  CHECK(m_zero->data == m_whole->data);
+  vcar::opencv::GrabCutParams nan_context;
+  nan_context.context = NAN;
+  vcar::LiftedPrompt one_point;
+  one_point.indices = {0};
+  one_point.points = {Eigen::Vector3f::Zero()};
+  CHECK_THROWS_WITH(GrabCutSegmenter(one_point, nan_context), Catch::Contains("GrabCutParams.context"));
+}
+
 namespace {
 
 // donut.ply (a trained object) standing on the synthetic world's table, and a renderer.
