@@ -28,7 +28,8 @@
 //  - box_in is geometry only: an object hidden behind another in some view still gets its box
 //    there (the segmenter then sees the occluder);
 //  - a point prompt lifts a neighbourhood of the point, not the object: its boxes cover part of
-//    the object (click several points spread over the object, or give a box);
+//    the object (give a box, or find the click's box with the segmenter first:
+//    box_from_click, algo/click_box.hpp);
 //  - an object deeper than wide seen end-on (a bench along the view axis), or whose centre part
 //    shows the background (a ring seen through its hole), breaks the depth-range assumption:
 //    parts are dropped, or the background is lifted instead;
