@@ -45,6 +45,14 @@ void check_box(const vcar::ClickBox& got, float x0, float y0, float x1, float y1
   CHECK(got.box[3] == Approx(y1));
 }
 
+// box_from_click on `seg` from `click` finds (x0, y0, x1, y1).
+void check_found(RectSegmenter seg, const Eigen::Vector2f& click, float x0, float y0, float x1, float y1) {
+  const auto got = vcar::box_from_click(std::ref(seg), click, seg.W, seg.H);
+  REQUIRE(got);
+  CHECK(got->rounds == seg.calls);
+  check_box(*got, x0, y0, x1, y1);
+}
+
 }  // namespace
 
 TEST_CASE("box_from_click grows a box around the click until the object lies inside it", "[click_box]") {
@@ -108,19 +116,13 @@ TEST_CASE("box_from_click grows past a small patch found inside the object", "[c
 
 TEST_CASE("box_from_click keeps the clicked object's component, not its neighbour's", "[click_box]") {
   // Two objects in a row: A [20, 60) x [20, 60) (clicked) and B [62, 150) x [20, 60), 2 px apart.
-  RectSegmenter seg{200, 100, {{20, 20, 60, 60}, {62, 20, 150, 60}}};
-  const auto got = vcar::box_from_click(std::ref(seg), Eigen::Vector2f(40.f, 40.f), 200, 100);
-  REQUIRE(got);
-  check_box(*got, 20.f, 20.f, 60.f, 60.f);  // A's box, B left out
+  check_found({200, 100, {{20, 20, 60, 60}, {62, 20, 150, 60}}}, {40.f, 40.f}, 20.f, 20.f, 60.f, 60.f);  // B left out
 }
 
 TEST_CASE("box_from_click does not grow past the image's edges", "[click_box]") {
   // The object fills the left 50 columns from top to bottom: its sides at the image's edges are
   // not touched ones.
-  RectSegmenter seg{200, 100, {{0, 0, 50, 100}}};
-  const auto got = vcar::box_from_click(std::ref(seg), Eigen::Vector2f(25.f, 50.f), 200, 100);
-  REQUIRE(got);
-  check_box(*got, 0.f, 0.f, 50.f, 100.f);
+  check_found({200, 100, {{0, 0, 50, 100}}}, {25.f, 50.f}, 0.f, 0.f, 50.f, 100.f);
 }
 
 TEST_CASE("box_from_click: nothing when the segmenter never separates the object", "[click_box]") {
@@ -148,10 +150,7 @@ TEST_CASE("box_from_click: nothing when the segmenter never separates the object
 TEST_CASE("box_from_click: a click next to the object finds it within the first square", "[click_box]") {
   // The click 5 px left of the object: its own pixel is background, the object's nearest pixel
   // lies within the first half-side (11.2 px).
-  RectSegmenter seg{200, 100, {{60, 20, 120, 70}}};
-  const auto got = vcar::box_from_click(std::ref(seg), Eigen::Vector2f(55.f, 45.f), 200, 100);
-  REQUIRE(got);
-  check_box(*got, 60.f, 20.f, 120.f, 70.f);
+  check_found({200, 100, {{60, 20, 120, 70}}}, {55.f, 45.f}, 60.f, 20.f, 120.f, 70.f);
 }
 
 TEST_CASE("box_from_click rejects bad input", "[click_box]") {
