@@ -112,10 +112,6 @@ int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
   std::optional<PhotoRenderer> photos;
   if (!o.images.empty()) photos.emplace(cpu_renderer, o.images, cams);
 
-  // Lifted with the CPU renderer: the depth of a PhotoRenderer is the CPU renderer's anyway, and
-  // its alpha (the photograph's: 1 everywhere) is no surface test. GrabCut cannot do without
-  // the boxes; an external program got the prompt before "boxes" existed, so there a prompt
-  // that cannot be lifted only costs the boxes.
   // GrabCut with points alone: the box around the clicked object, found by GrabCut itself on
   // the prompt view (algo/click_box.hpp), is lifted instead of the points' neighbourhood.
   const std::optional<Eigen::Vector4f> user_box = prompt.box;
@@ -131,6 +127,10 @@ int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
       else warn("--points: GrabCut found no object at the point: its neighbourhood is lifted");
     }
   }
+  // Lifted with the CPU renderer: the depth of a PhotoRenderer is the CPU renderer's anyway, and
+  // its alpha (the photograph's: 1 everywhere) is no surface test. GrabCut cannot do without
+  // the boxes; an external program got the prompt before "boxes" existed, so there a prompt
+  // that cannot be lifted only costs the boxes.
   std::optional<LiftedPrompt> lifted;
   if ((grabcut || external) && liftable) {
     progress.message("lifting the prompt");
