@@ -7,7 +7,7 @@
 // in the coarse round. It is also what empties the fine vote when the masks undershoot: then
 // every surface Gaussian of the object is outside the mask in the views that see it edge-on and
 // its ratio R_i spreads over [0.5, 1]. Which of the two a scene shows can be read off the vote:
-// with N(t) the number of candidates kept at threshold t (Eq. 3, with R4's unseen ones),
+// with N(t) the number of candidates kept at threshold t (Eq. 3),
 //   tau* = tau_strict   if N(tau_strict) >= (1 - s) N(tau_fine)                    (Eq. R7)
 //   tau* = tau_fine     otherwise
 // A decisive vote (at most a fraction s of the majority's Gaussians between the two thresholds:

@@ -31,7 +31,7 @@ namespace vcar {
 namespace detail {  // vcar::detail
 // The end of a coarse round, shared by vcar::segment and vcar::segment_objects: the round's mask
 // edits counted (Eq. R11, R12), its views weighed by their agreement (Eq. R13), and G_coarse
-// selected at tau_coarse (Eq. 3, or the robust vote's R2-R6) with its scores.
+// selected at tau_coarse (Eq. 3, or the robust vote's R2, R3, R13) with its scores.
 inline void coarse_selection(RoundVote& coarse, const VcarParams& params, Diagnostics& diag,
                              std::vector<Index>& selected, std::vector<float>& scores) {
   diag.overshoot_eroded = coarse.overshoot_eroded();
@@ -83,7 +83,7 @@ SegmentationResult segment(const GaussianScene& scene, const std::vector<Camera>
   auto usable = [&](const Mask* m) { return detail::usable(m, params); };
 
   // ---- Stage 1: coarse VWV on the training views, rendered from the whole scene (Eq. 1-3;
-  // with the robust vote, Eq. R2-R5).
+  // with the robust vote, Eq. R2, R3, R11-R13).
   stage("coarse");
   const auto t_setup = Clock::now();
   detail::RoundVote coarse(scene, nullptr, params, false);  // Morton order of the means: part of the vote
