@@ -5,7 +5,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <regex>
 #include <set>
+#include <string>
 
 #include "../../examples/web/src/web_flow.hpp"
 
@@ -253,4 +258,24 @@ TEST_CASE("the browser session selects the clicked ball, with orbit views and wi
     CHECK_FALSE(std::filesystem::exists(pa));
     CHECK_FALSE(std::filesystem::exists(pb));
   }
+}
+
+TEST_CASE("web::quality_of: the page's qualities, the same numbers as grabcut.js's vcarQualities") {
+  // grabcut.js (the page's worker) and web_flow.hpp (the native twin) each hold the table: read
+  // the JavaScript's and compare, so that the two cannot drift apart.
+  const std::filesystem::path js = std::filesystem::path(__FILE__).parent_path() / "../../examples/web/web/grabcut.js";
+  std::ifstream in(js);
+  REQUIRE(in);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const char* name : {"full", "fast"}) {
+    const std::regex row(std::string(name) + R"(: \{ maxSide: (\d+), context: (-?[0-9.]+), iterations: (\d+) \})");
+    std::smatch m;
+    REQUIRE(std::regex_search(text, m, row));
+    const vcar::web::Quality q = vcar::web::quality_of(name);
+    CHECK(q.max_side == std::stoi(m[1].str()));
+    CHECK(q.grabcut_context == std::stof(m[2].str()));
+    CHECK(q.grabcut_iterations == std::stoi(m[3].str()));
+  }
+  CHECK(vcar::web::quality_of("full").max_side == vcar::web::SegmentOptions{}.max_side);  // the page's default
+  CHECK_THROWS_AS(vcar::web::quality_of("best"), vcar::Error);
 }

@@ -1,13 +1,17 @@
 // The browser flow run natively: the same Session, segmenter and parameters as the WebAssembly
 // build, for the browser test (same selection?) and the browser-vs-native benchmark.
 //   vcar_web_native --scene FILE [--cameras FILE] [--view NAME] (--click U,V | --box X0,Y0,X1,Y1 | both
-//                   | --objects U,V;U,V;...) [--segmenter region|grabcut] [--max-side N] [--orbit-views N]
-//                   [--grabcut-context C] [--click-box on|off] [--out result.json]
+//                   | --objects U,V;U,V;...) [--segmenter region|grabcut] [--quality full|fast]
+//                   [--max-side N] [--orbit-views N] [--grabcut-context C] [--grabcut-iterations N]
+//                   [--click-box on|off] [--out result.json]
 // --segmenter grabcut (where OpenCV is found): vcar::opencv::grabcut on each frame's box, what
 // the page's grabcut.js does with OpenCV's WebAssembly build; region (the default here): vcar's
-// colour + depth region growing, as the page's fallback. --grabcut-context: GrabCutParams::context
-// (the page's vcarGrabCutParams.context; negative: the whole frame). --click-box off: a click lifts
-// its neighbourhood (SegmentOptions::click_box; the page's clickBox=off).
+// colour + depth region growing, as the page's fallback. --quality: the page's quality (web_flow.hpp
+// quality_of: the views' size, GrabCut's crop and iterations), which --max-side, --grabcut-context
+// and --grabcut-iterations override one at a time. --grabcut-context: GrabCutParams::context
+// (the page's vcarGrabCutParams.context; negative: the whole frame); --grabcut-iterations:
+// GrabCutParams::iterations (vcarGrabCutParams.iterations). --click-box off: a click lifts its
+// neighbourhood (SegmentOptions::click_box; the page's clickBox=off).
 //   vcar_web_native --convert IN OUT      (any scene format -> .ply / .splat / .spz by OUT's
 //                                          extension: inputs for the browser format tests)
 // Prints (and writes to --out) {"selected": n, "seconds": t, "indices": [...], "split": {...}}:
@@ -21,6 +25,7 @@
 #include <fstream>
 #include <iostream>
 #include <iterator>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -40,7 +45,9 @@ std::vector<std::uint8_t> slurp(const std::string& p) {
 int main(int argc, char** argv) {
   std::string scene, cameras, view, click, box, objects, segmenter = "region", out;
   vcar::web::SegmentOptions opt;
-  float grabcut_context = vcar::web::grabcut_context;
+  std::string quality = "full";
+  std::optional<int> max_side, grabcut_iterations;
+  std::optional<float> grabcut_context;
   if (argc == 4 && std::string(argv[1]) == "--convert") {
     try {
       vcar::io::write_scene(argv[3], vcar::io::read_scene(argv[2]));
@@ -64,9 +71,11 @@ int main(int argc, char** argv) {
     else if (a == "--objects") objects = next();
     else if (a == "--segmenter") segmenter = next();
     else if (a == "--out") out = next();
-    else if (a == "--max-side") opt.max_side = std::stoi(next());
+    else if (a == "--quality") quality = next();
+    else if (a == "--max-side") max_side = std::stoi(next());
     else if (a == "--orbit-views") opt.orbit_views = std::stoi(next());
     else if (a == "--grabcut-context") grabcut_context = std::stof(next());
+    else if (a == "--grabcut-iterations") grabcut_iterations = std::stoi(next());
     else if (a == "--click-box") opt.click_box = next() != "off";
     else { std::cerr << "unknown argument " << a << "\n"; return 2; }
   }
@@ -77,6 +86,10 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
+    const vcar::web::Quality q = vcar::web::quality_of(quality);  // what --max-side and --grabcut-* leave
+    opt.max_side = max_side.value_or(q.max_side);
+    const float context = grabcut_context.value_or(q.grabcut_context);
+    const int iterations = grabcut_iterations.value_or(q.grabcut_iterations);
     vcar::web::Session s;
     s.load_scene(slurp(scene), scene);
     if (!cameras.empty()) s.load_cameras(slurp(cameras), cameras);
@@ -91,11 +104,12 @@ int main(int argc, char** argv) {
     vcar::web::FrameMaskFn custom;
     if (segmenter == "grabcut") {
 #ifdef VCAR_WEB_NATIVE_HAS_OPENCV
-      custom = [grabcut_context](std::size_t k, const vcar::Camera& cam, const vcar::ImageRGB8& rgb, const vcar::Prompt& p, bool,
+      custom = [context, iterations](std::size_t k, const vcar::Camera& cam, const vcar::ImageRGB8& rgb, const vcar::Prompt& p, bool,
                                  const vcar::web::FrameBox& b) -> std::optional<vcar::Mask> {
         if (!b) return std::nullopt;
         vcar::opencv::GrabCutParams params;
-        params.context = grabcut_context;
+        params.context = context;
+        params.iterations = iterations;
         std::vector<vcar::opencv::GrabCutSeed> seeds;
         if (k == 0)
           for (const Eigen::Vector2f& q : p.points) seeds.push_back({q, true});

@@ -13,9 +13,20 @@
 namespace vcar::web {
 
 inline constexpr int default_view_width = 640, default_view_height = 480;
-// The page's GrabCut crop (grabcut.js vcarGrabCutParams.context, GrabCutParams::context): the
-// box padded by this share of its size each side; negative: the whole frame.
-inline constexpr float grabcut_context = -1.f;
+// The page's trade-offs of speed against accuracy (grabcut.js vcarQualities, the same numbers;
+// the stage test's Jaccard against the page checks they agree): the views' long side
+// (SegmentOptions::max_side), GrabCut's crop (GrabCutParams::context: the box padded by this
+// share of its size each side; negative: the whole frame) and its iterations per frame.
+struct Quality {
+  int max_side;
+  float grabcut_context;
+  int grabcut_iterations;
+};
+inline Quality quality_of(const std::string& name) {
+  if (name == "full") return {400, -1.f, 5};
+  if (name == "fast") return {200, 1.f, 3};
+  throw Error("unknown quality '" + name + "' (full or fast)", "quality");
+}
 
 inline Camera reference_view(const Session& s, const std::string& view) {
   if (s.cameras().empty()) {

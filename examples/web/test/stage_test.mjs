@@ -4,7 +4,8 @@
 //
 //   node test/stage_test.mjs --native BUILD/vcar_web_native --vcar BUILD/vcar \
 //        (--dataset DIR | --stage ../stages/three_objects.json --seed 1 [--synth-args "--views 8"]) \
-//        [--prompt click|box] [--segmenter grabcut|region] [--max-side 400] [--min-iou 0.98]
+//        [--prompt click|box] [--segmenter grabcut|region] [--quality full|fast] [--max-side N]
+//        [--min-iou 0.98]
 //        [--min-f1 biker=0.9,guitar=0.8] [--spz ../../../shared/data/biker.spz] [--timeout 600]
 // --dataset: a `vcar synth --stage` dataset; without it, `vcar synth --stage --seed` (with
 // --synth-args, e.g. "--views 8 --width 320 --height 240") writes one into a temporary folder
@@ -13,10 +14,11 @@
 // For each object of the dataset's prompt.json that has a prompt, on its reference view: a click
 // on its first positive point (--prompt click, the default) or its box (--prompt box: the box
 // around the object's visible mask) runs through the page with the segmenter: the first object
-// through the URL contract (index.html?scene=&cameras=&view=&click=|box=&segmenter=&maxSide=),
+// through the URL contract (index.html?scene=&cameras=&view=&click=|box=&segmenter=&quality=
+// [&maxSide=]),
 // the others on the same page through window.vcarPage.segment (what a click on the viewer runs:
 // the worker keeps the scene and OpenCV), so each object's seconds are a click's on a loaded page;
-// the native twin runs the same prompt, segmenter and view size (first, before Chromium starts). Checks, per object: a selection
+// the native twin runs the same prompt, segmenter and quality (first, before Chromium starts). Checks, per object: a selection
 // that is neither empty nor the whole scene; Jaccard with the native selection >= --min-iou; the
 // 3D F1 of the page's selection against the object's labelled Gaussians (`vcar eval`'s f1_3d:
 // eval::selection_scores on gt/gaussian_ids.bin, the definition bench_field reports) >= its
@@ -37,7 +39,8 @@ const native = need('native'), cli = need('vcar');
 const segmenter = args.segmenter ?? 'grabcut';
 const promptKind = args.prompt ?? 'click';
 if (!['click', 'box'].includes(promptKind)) { console.error('--prompt: click or box'); process.exit(2); }
-const maxSide = Number(args['max-side'] ?? 400);
+const quality = args.quality ?? 'full';  // the page's quality= (grabcut.js vcarQualities), the native --quality
+const maxSide = args['max-side'] === undefined ? undefined : Number(args['max-side']);  // overrides the quality's
 const minIou = Number(args['min-iou'] ?? 0.98);
 const minF1 = Object.fromEntries((args['min-f1'] ?? '').split(',').filter(Boolean).map((e) => e.split('=')).map(([k, v]) => [k, Number(v)]));
 const timeoutMs = Number(args.timeout ?? 600) * 1000;
@@ -50,7 +53,7 @@ function fail(msg) { console.error('FAIL: ' + msg); failed = true; }
 
 // The dataset: given, or written by vcar synth.
 let dataset = args.dataset ? path.resolve(args.dataset) : null, scratch = null;
-const out = { segmenter, prompt: promptKind, max_side: maxSide };
+const out = { segmenter, prompt: promptKind, quality, ...(maxSide ? { max_side: maxSide } : {}) };
 if (!dataset) {
   scratch = fs.mkdtempSync(path.join(os.tmpdir(), 'vcar-stage-'));
   dataset = path.join(scratch, 'stage');
@@ -72,7 +75,7 @@ const prompts = objects.map((o) => ({ o, click: promptKind === 'click' ? o.point
 for (const p of prompts)
   p.nat = runNative(native, ['--scene', scene, '--cameras', cameras, '--view', p.o.reference_view,
                              ...(p.click ? ['--click', p.click.join(',')] : ['--box', p.box.join(',')]),
-                             '--segmenter', segmenter, '--max-side', String(maxSide)]);
+                             '--segmenter', segmenter, '--quality', quality, ...(maxSide ? ['--max-side', String(maxSide)] : [])]);
 const inputs = { 'scene.ply': scene, 'cameras.json': cameras };
 if (args.spz) inputs['input.spz'] = path.resolve(args.spz);
 const server = await serve(inputs);
@@ -80,7 +83,7 @@ const browser = await launch(args.chromium);
 const rows = [];
 try {
   const page = await newPage(browser);
-  const q = `scene=/input/scene.ply&cameras=/input/cameras.json&segmenter=${segmenter}&maxSide=${maxSide}`;
+  const q = `scene=/input/scene.ply&cameras=/input/cameras.json&segmenter=${segmenter}&quality=${quality}${maxSide ? `&maxSide=${maxSide}` : ''}`;
   for (const [k, { o, click, box, nat }] of prompts.entries()) {
     let r;
     if (k === 0) {
@@ -92,7 +95,7 @@ try {
         const s = await window.vcarPage.segment(cam, click ? click[0] : NaN, click ? click[1] : NaN, opts);
         return { selected: s.indices.length, indices: Array.from(s.indices), seconds: s.seconds,
                  split: { ...s.diagnostics.split, load_segmenter: s.loadSeconds } };
-      }, o.reference_view, click, { segmenterName: segmenter, maxSide, ...(box ? { box } : {}) });
+      }, o.reference_view, click, { segmenterName: segmenter, quality, ...(maxSide ? { maxSide } : {}), ...(box ? { box } : {}) });
     }
     rows.push({ o, click, box, r, nat, jaccard: jaccard(r.indices, nat.indices) });
   }

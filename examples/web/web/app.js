@@ -170,7 +170,7 @@ async function loadCameras(bytes, name) {
 async function referenceView(name) { return (await call({ type: 'view', name })).camera; }
 
 // u, v: the click (NaN: none); options.box: [x0, y0, x1, y1] (pixels of cam), with or instead of
-// the click; options.segmenterName: the page's choice unless given.
+// the click; options.segmenterName, options.quality: the page's choices unless given.
 async function segment(cam, u, v, options = {}) {
   const rect = canvas.getBoundingClientRect(), vrect = $('viewer').getBoundingClientRect();
   const sx = rect.width / cam.width, sy = rect.height / cam.height;
@@ -187,7 +187,7 @@ async function segment(cam, u, v, options = {}) {
     Object.assign(frame.style, { left: (rect.left - vrect.left + x0 * sx) + 'px', top: (rect.top - vrect.top + y0 * sy) + 'px',
                                  width: ((x1 - x0) * sx) + 'px', height: ((y1 - y0) * sy) + 'px' });
   }
-  options = { segmenterName: $('segmenter-select').value, ...options };
+  options = { segmenterName: $('segmenter-select').value, quality: $('quality-select').value, ...options };
   $('progress').value = 0;
   const r = await call({ type: 'segment', camera: cam, u, v, options });
   selection = r.indices;
@@ -202,7 +202,7 @@ async function segment(cam, u, v, options = {}) {
 // Several objects at once (vcar::segment_objects): prompts = [{click: [u, v]} | {box: [...]}]
 // on cam. The viewer highlights them all; the downloads stay with single selections.
 async function segmentObjects(cam, prompts, options = {}) {
-  options = { segmenterName: $('segmenter-select').value, ...options };
+  options = { segmenterName: $('segmenter-select').value, quality: $('quality-select').value, ...options };
   $('progress').value = 0;
   const r = await call({ type: 'segment-objects', camera: cam, prompts, options });
   selection = r.objects.flatMap((o) => Array.from(o.indices));
@@ -319,6 +319,7 @@ async function unattended() {
     const prompts = objects.split(';').map((c) => ({ click: c.split(',').map(Number) }));
     const opts = {};
     if (params.get('segmenter')) opts.segmenterName = params.get('segmenter');
+    if (params.get('quality')) opts.quality = params.get('quality');
     if (params.get('maxSide')) opts.maxSide = Number(params.get('maxSide'));
     const r = await segmentObjects(cam, prompts, opts);
     $('vcar-result').textContent = JSON.stringify({
@@ -336,6 +337,7 @@ async function unattended() {
   const opts = {};
   if (box) opts.box = box.split(',').map(Number);
   if (params.get('segmenter')) opts.segmenterName = params.get('segmenter');
+  if (params.get('quality')) opts.quality = params.get('quality');
   if (params.get('maxSide')) opts.maxSide = Number(params.get('maxSide'));
   const r = await segment(cam, u, v, opts);
   await new Promise((res) => requestAnimationFrame(() => requestAnimationFrame(res)));  // the highlight is drawn

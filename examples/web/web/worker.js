@@ -5,7 +5,8 @@
 //               {type: 'default-view', width, height}
 //               {type: 'segment', camera, u, v, options} | {type: 'ply', kind: 'object'|'removed'|'state'|'scene'}
 //               {type: 'segment-objects', camera, prompts: [{click: [u, v] | null, box: [...] | null}], options}
-//               (options: {segmenterName: 'grabcut' | 'region', box: [x0, y0, x1, y1], maxSide, ...};
+//               (options: {segmenterName: 'grabcut' | 'region', quality: 'full' | 'fast',
+//               box: [x0, y0, x1, y1], maxSide, ...};
 //               u, v NaN: no click, the box alone)
 // Messages out: {type: 'ready', simd} | {type: 'progress', stage, view, views, elapsed}
 //               {type: 'scene', n, format} | {type: 'cameras', names} | {type: 'view', camera}
@@ -15,7 +16,7 @@
 //               GrabCut request only; diagnostics.split: vcar::segment's seconds as renders,
 //               segmenter and vcar, web_session.hpp timing_split)
 //               {type: 'ply', kind, bytes} | {type: 'error', message, request}
-importScripts('vcar.js', 'vendor/fzstd/fzstd.js');  // fzstd: SPZ v4's zstd streams (self.fzstd)
+importScripts('vcar.js', 'vendor/fzstd/fzstd.js', 'grabcut.js');  // fzstd: SPZ v4's zstd streams (self.fzstd); grabcut.js: GrabCut on OpenCV's cv, once loaded
 
 let vcar = null, session = null;
 const ready = createVcar().then((m) => {
@@ -48,7 +49,7 @@ function loadOpenCV() {
   if (!openCV) {
     openCV = new Promise((resolve, reject) => {
       try {
-        importScripts('vendor/opencv/opencv.js', 'grabcut.js');
+        importScripts('vendor/opencv/opencv.js');
       } catch (e) {
         reject(new Error('OpenCV could not be loaded (vendor/opencv/opencv.js): ' + e.message));
         return;
@@ -95,13 +96,21 @@ onmessage = async (ev) => {
       const options = { ...(q.options || {}) };
       const name = options.segmenterName || 'grabcut';
       delete options.segmenterName;
+      // options.quality (grabcut.js vcarQualities): the views' size unless maxSide is given, and
+      // GrabCut's crop and iterations.
+      const quality = options.quality || 'full';
+      delete options.quality;
+      const preset = self.vcarQualities[quality];
+      if (!preset) throw new Error(`unknown quality '${quality}' (${Object.keys(self.vcarQualities).join(' or ')})`);
+      if (options.maxSide === undefined) options.maxSide = preset.maxSide;
+      const grabcutParams = { ...self.vcarGrabCutParams, context: preset.context, iterations: preset.iterations };
       let seg = hostSegmenter(options);
       delete options.segmenterScript;
       let loadSeconds = 0;  // loading OpenCV (the first GrabCut request only): part of `seconds`
       if (!seg && name === 'grabcut') {
         const { cv } = await loadOpenCV();
         loadSeconds = (performance.now() - t0) / 1000;
-        seg = (frame) => self.vcarGrabCut(cv, frame);
+        seg = (frame) => self.vcarGrabCut(cv, frame, grabcutParams);
       } else if (!seg && name !== 'region') {
         throw new Error(`unknown segmenter '${name}' (grabcut or region)`);
       }
