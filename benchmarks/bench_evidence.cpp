@@ -135,7 +135,7 @@ using evidence::is_360;
 using evidence::kPeers;
 const std::vector<std::string> kVariants = {"coarse", "sss", "abr", "full", "occlusion", "gapdir", "robust"};
 // The robust preset with one mechanism changed each (docs/robust.md ablation).
-const std::vector<std::string> kRobustAblation = {"robust-noocc", "robust-nolowpass", "robust-tau08",
+const std::vector<std::string> kRobustAblation = {"robust-nor3", "robust-nolowpass", "robust-tau08",
                                                   "robust-noundershoot", "robust-nostrict",
                                                   "robust-nocoplanar", "robust-noovershoot",
                                                   "robust-nogrow"};
@@ -167,7 +167,10 @@ synth::OracleParams oracle_for(const Experiment& e) {
 VcarParams vcar_params(const std::string& variant, const Experiment& e, const std::vector<std::string>& set) {
   if (variant.rfind("robust", 0) == 0) {  // one preset for every rig: the library's default
     VcarParams p = VcarParams::robust();
-    if (variant == "robust-noocc") p.evidence.fine_occlusion = false;
+    if (variant == "robust-nor3") {  // R3 in both rounds, and R10, which reads it
+      p.evidence.occlusion = false;
+      p.coplanar.radius = 0.f;
+    }
     else if (variant == "robust-nolowpass") p.abr_lowpass = false;
     else if (variant == "robust-tau08") p.tau_fine = 0.8f;
     else if (variant == "robust-noundershoot") p.undershoot.band = 0.f;

@@ -61,7 +61,9 @@
 // seconds counted in every run that uses them, plus VCAR's fine round); t_method = the method
 // without the segmenter (VCAR's own renders included); t_render = VCAR's frame renders for the
 // segmenter (the fine round; the training images are photographs in a real capture, so their
-// renders here are counted nowhere); time_s = t_method + t_segment.
+// renders here are counted nowhere); time_s = t_method + t_segment; t_own (VCAR's rows) =
+// t_method without any render VCAR asked for (the fine round's frames and the depth the robust
+// vote renders itself): issue 47's "own time".
 // 2D quality (mask_iou): the mean IoU of the coarse-round masks against the target's visible
 // ground truth of each training view, over the frames with a mask; mask_none counts the frames
 // answered "no mask" (of mask_frames).
@@ -272,11 +274,14 @@ public:
   RenderOutput render(const RenderRequest& q) {
     for (const auto& [key, out] : kept_)
       if (key.same(q)) return out;
+    const auto t0 = Clock::now();
     RenderOutput out = r_->render(q);
+    seconds_ += since(t0);
     kept_.emplace_back(Key{q}, out);
     if (kept_.size() > 2) kept_.pop_front();
     return out;
   }
+  double seconds() const { return seconds_; }  // every render asked for (kept ones counted once)
 
 private:
   struct Key {
@@ -290,6 +295,7 @@ private:
   };
   cpu::TiledRenderer* r_;
   std::deque<std::pair<Key, RenderOutput>> kept_;
+  double seconds_ = 0;
 };
 static_assert(Renderer<LastRenders>);
 
@@ -432,7 +438,7 @@ public:
     std::filesystem::create_directories(opt_.out);
     csv_.open(opt_.out / "field.csv", std::ios::trunc);
     if (!csv_) throw Error("cannot write", (opt_.out / "field.csv").string());
-    csv_ << evidence::csv_header() << ",stage,role,segmenter,mask_iou,mask_none,mask_frames\n";
+    csv_ << evidence::csv_header() << ",stage,role,segmenter,mask_iou,mask_none,mask_frames,t_own\n";
   }
 
   // Every cell of one (seed, target).
@@ -668,6 +674,7 @@ private:
       std::vector<Index> sel;
       std::optional<LogScales> scales;
       std::optional<GaussianScene> own_scene;
+      double t_own = NAN;  // VCAR: t_method without any render (issue 47's cost: the method's own time)
       const auto t0 = Clock::now();
       if (is_vcar) {
         VcarParams p;
@@ -692,7 +699,7 @@ private:
           // the rig plus the occlusion test in both rounds (R3) and view reliability (R13), no
           // shrinkage between evidence levels (kappa 0). Not a library preset yet.
           p = evidence::is_360(k.rig_name) ? VcarParams::lerf() : VcarParams::nvos();
-          p.evidence.coarse_occlusion = p.evidence.fine_occlusion = p.reliability.enabled = true;
+          p.evidence.occlusion = p.reliability.enabled = true;
           p.evidence.kappa = 0.f;
           r.preset = evidence::is_360(k.rig_name) ? "lerf+R3+R13" : "nvos+R3+R13";
         } else {
@@ -710,6 +717,7 @@ private:
         if (seg.seconds) r.t_segment = *seg.seconds - seg0;
         r.t_segment += t_coarse;
         r.time_s = r.t_method + r.t_segment;
+        t_own = r.t_method - renderer.seconds();
         sel = std::move(res.indices);
         if (!sel.empty()) scales = std::move(res.log_scale);
       } else {
@@ -727,7 +735,7 @@ private:
       evidence::evaluate(r, renderer_, w.scene, rig.eval, k.gt, *k.truth, sel, scales ? &*scales : nullptr,
                          own_scene ? &*own_scene : nullptr);
       csv_ << evidence::csv_row(r) << "," << opt_.stage.stem().string() << "," << row.role << "," << cell.segmenter
-           << "," << evidence::fmt(mask_iou) << "," << none << "," << frames.size() << "\n";
+           << "," << evidence::fmt(mask_iou) << "," << none << "," << frames.size() << "," << evidence::fmt(t_own) << "\n";
       csv_.flush();
       std::fprintf(stderr, "  %-7s %-11s %-8s F1_3d %.3f (P %.3f R %.3f) mIoU %.3f bIoU %.3f  %.1fs (method %.1fs)\n",
                    row.role.c_str(), m.c_str(), r.preset.c_str(), r.f1_3d, r.precision_3d, r.recall_3d, r.miou,

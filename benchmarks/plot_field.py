@@ -31,7 +31,7 @@ SEGMENTERS = ["grabcut", "isnet", "oracle", "oracle-sam-nodrift", "oracle-sam"]
 RIGS = ["forward", "orbit"]
 NUM = {"seed", "gaussians", "object_gaussians", "width", "height", "n_train", "n_eval", "miou", "macc", "miou_01",
        "boundary_iou", "boundary_f1", "f1_3d", "precision_3d", "recall_3d", "selected", "t_render", "t_segment",
-       "t_method", "time_s", "frames_segmented", "n_coarse", "n_fine", "mask_iou", "mask_none", "mask_frames"}
+       "t_method", "time_s", "frames_segmented", "n_coarse", "n_fine", "mask_iou", "mask_none", "mask_frames", "t_own"}
 LABEL = {"vcar:paper": "VCAR, paper preset", "vcar:robust": "vcar default (robust)",
          "vcar:code": "VCAR, released code's preset", "vcar:lean": "VCAR paper preset + R3 + R13 (issue 47)"}
 SEG_LABEL = {"grabcut": "GrabCut", "isnet": "ISNet", "oracle": "oracle (rendered)",

@@ -159,8 +159,8 @@ TEST_CASE("VcarParams: R10 needs the coarse occlusion test, and its ranges") {
   vcar::VcarParams p = vcar::VcarParams::robust();
   CHECK(p.coplanar.radius > 0.f);
   CHECK_NOTHROW(p.validate());
-  p.evidence.coarse_occlusion = false;
-  CHECK_THROWS_WITH(p.validate(), Catch::Contains("coarse_occlusion"));
+  p.evidence.occlusion = false;
+  CHECK_THROWS_WITH(p.validate(), Catch::Contains("occlusion=true"));
   p = vcar::VcarParams::robust();
   p.coplanar.radius = -1.f;
   CHECK_THROWS_WITH(p.validate(), Catch::Contains("coplanar_radius"));

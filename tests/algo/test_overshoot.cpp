@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <cstdint>
-#include <limits>
 #include <vector>
 
 #include "vcar/algo/overshoot.hpp"
@@ -83,14 +82,13 @@ TEST_CASE("Eq. R11b is a median: a nearer neighbour along one side does not move
   CHECK(vcar::overshoot_px(square_mask(20, 20, 3, 3, 17, 17), r.alpha, r.depth, 0.05f) == 2.0);
 }
 
-TEST_CASE("Eq. R11b's reach: contour pixels in contact with a neighbour at the same depth are not read") {
+TEST_CASE("Eq. R11b at a contact: an exact mask between same-depth neighbours reads an overshoot") {
   // A band [0, 20) x [2, 18) at depth 1 before a wall: the target, the rectangle [6, 14) x [2, 18)
   // of it, touches same-depth neighbours left and right, where the render has no edge. Its exact
   // mask: the top and bottom rows (8 + 8 px) lie on the band's edges (s = 0); each side column
   // (y = 3..16, 14 px) reads its distance to the nearest corner edge pixel in the mask,
-  // min(y - 2, 17 - y) = 1..7. Unlimited: 16 zeros and 4 each of 1..7, the median (index 22 of 44)
-  // is 2: an overshoot the mask does not have. Reach 0.5 r_M = 0.5 sqrt(128 / pi) = 3.19 px: the
-  // zeros and the 1s, 2s and 3s (28 values), the median (index 14) is 0.
+  // min(y - 2, 17 - y) = 1..7: 16 zeros and 4 each of 1..7, the median (index 22 of 44) is 2, an
+  // overshoot the mask does not have (the limit docs/robust.md states for R11 at contacts).
   Render r{ImageF(20, 20, 1), ImageF(20, 20, 1)};
   for (int y = 0; y < 20; ++y)
     for (int x = 0; x < 20; ++x) {
@@ -98,20 +96,11 @@ TEST_CASE("Eq. R11b's reach: contour pixels in contact with a neighbour at the s
       r.alpha.data[q] = 1.f;
       r.depth.data[q] = y >= 2 && y < 18 ? 1.f : 3.f;
     }
-  const Mask m = square_mask(20, 20, 6, 2, 14, 18);
   const std::vector<std::uint8_t> e = vcar::occlusion_edges(r.alpha, r.depth, 0.05f);
-  CHECK(vcar::overshoot_px(m, e) == 2.0);
-  const double reach = vcar::overshoot_reach_px(128, 0.5);
-  CHECK(reach == Approx(0.5 * std::sqrt(128.0 / 3.14159265358979)));
-  CHECK(vcar::overshoot_px(m, e, reach) == 0.0);
-  CHECK(vcar::overshoot_reach_px(128, 0.0) == std::numeric_limits<double>::infinity());
-  // A reach under 1 px keeps only the 16 zeros.
-  CHECK(vcar::overshoot_px(m, e, 0.5) == 0.0);
+  CHECK(vcar::overshoot_px(square_mask(20, 20, 6, 2, 14, 18), e) == 2.0);
   // A mask that stops short (4 px inside the band's edges, every nearest edge outside it) reads
-  // its undershoot at any reach: only edges inside the mask are limited.
-  const Mask inner = square_mask(20, 20, 6, 6, 14, 14);
-  CHECK(vcar::overshoot_px(inner, e, 3.0) == -4.0);
-  CHECK(vcar::overshoot_px(inner, e) == -4.0);
+  // its undershoot.
+  CHECK(vcar::overshoot_px(square_mask(20, 20, 6, 6, 14, 14), e) == -4.0);
 }
 
 TEST_CASE("Eq. R11c by hand: erosion keeps the pixels farther than e from the background") {

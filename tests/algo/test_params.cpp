@@ -71,15 +71,13 @@ TEST_CASE("validate names the parameter at fault") {
 
 TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond the paper; the paper presets none") {
   const auto r = VcarParams::robust();
-  CHECK(r.evidence.fine_occlusion);
-  CHECK(r.evidence.coarse_occlusion);
+  CHECK(r.evidence.occlusion);
   CHECK(r.reliability.enabled);      // R13
   CHECK(r.tau_fine == 0.7f);
   CHECK(r.undershoot.band > 0.f);
   CHECK(r.strict.tau > r.tau_fine);
   CHECK(r.abr_lowpass);  // as the paper; R8 reads own footprints after a split vote
   CHECK(r.snap.overshoot_min > 0.f);      // R11
-  CHECK(r.snap.overshoot_reach == 0.f);   // R11b's reach: measured, not adopted (docs/robust.md)
   CHECK(r.snap.grow_max > 0.f);           // R12
   CHECK(r.evidence.kappa == 2.f);
   CHECK(r.robust_vote());
@@ -112,6 +110,6 @@ TEST_CASE("validate: rho = 1 can never trigger the strict gate, and the robust p
   p = {}; p.strict.tau = 1.2f;      CHECK(where_of(p) == "tau_strict");
   // Each mechanism alone makes the vote RobustVoting's.
   p = {}; p.reliability.enabled = true; CHECK(p.robust_vote());
-  p = {}; p.evidence.fine_occlusion = true;   CHECK(p.robust_vote());
+  p = {}; p.evidence.occlusion = true;   CHECK(p.robust_vote());
   p = {}; p.undershoot.band = 1.f;  CHECK(p.robust_vote());
 }

@@ -17,17 +17,12 @@
 // such edge pixel, positive when it lies inside the mask,
 //   s(c) = d(c, E_j in M_j)        if d(c, E_j in M_j) <= d(c, E_j outside M_j)
 //        = -d(c, E_j outside M_j)  otherwise                                       (Eq. R11b)
-//   o_j  = median of s(c) over the contour pixels c with s(c) <= r r_M
-// (r = overshoot_reach, r_M = sqrt(|M_j| / pi) the mask's radius; r = 0: every contour pixel).
+//   o_j  = median of s(c) over the contour pixels c
 // Where the object touches a neighbour at its own depth (a contact: donuts side by side) the
-// render has no occlusion edge along the contour, and the nearest edge lies far inside the mask
-// (the object's own rim, or the neighbour's): it reads as an overshoot the mask does not have,
-// so those pixels are left out. A contour pixel whose nearest edge lies outside the mask (a mask
-// that stops short of the render's edge) always counts: limiting those too (|s(c)| <= r r_M)
-// read a GrabCut mask that stops short on a small donut as overshooting (3D F1 0.921 -> 0.712).
-// Off in every preset (r = 0): r = 0.5 takes nine trained donuts 1 cm apart with exact masks
-// from 3D F1 0.851 to 0.938, but a held-out GrabCut donut (stage seed 13, the CLI's rig) from
-// 0.931 to 0.446 (docs/notes/default-2026-12-02.md).
+// render has no occlusion edge along the contour, and the nearest edge lies far inside the mask:
+// those pixels read as an overshoot the mask does not have. Leaving them out (a reach of r r_M,
+// r_M the mask's radius) was measured and removed: nine trained donuts 1 cm apart with exact
+// masks 3D F1 0.851 -> 0.938, a held-out GrabCut donut 0.931 -> 0.446 (docs/robust.md, History).
 // (Euclidean distances between pixel centres). A mask on the object's true edge gives o_j < 0:
 // the render's edge lies outside the true silhouette by the splats' own extent, measured 1-5 px
 // at 160 x 120 and 7-10 px at 640 x 480 (median over a round's views); a mask eroded by e px
@@ -106,18 +101,9 @@ inline std::vector<std::uint8_t> occlusion_edges(const ImageF& alpha, const Imag
   return e;
 }
 
-// Eq. R11b's reach in px for a mask of `foreground` pixels: r sqrt(|M| / pi); r = 0: unlimited.
-inline double overshoot_reach_px(std::size_t foreground, double r) {
-  if (!(r > 0.0)) return std::numeric_limits<double>::infinity();
-  return r * std::sqrt(static_cast<double>(foreground) / 3.14159265358979323846);
-}
-
 // Eq. R11b: the overshoot o_j of mask m (px; > 0: its contour lies outside the render's
-// occlusion edges `edge`, Eq. R11a), read on the contour pixels whose nearest edge lies outside the
-// mask, or inside it within `reach` px.
-// 0 when no contour pixel has one (no contour, no edge, or none near).
-inline double overshoot_px(const Mask& m, const std::vector<std::uint8_t>& edge,
-                           double reach = std::numeric_limits<double>::infinity()) {
+// occlusion edges `edge`, Eq. R11a). 0 when no contour pixel has one (no contour, no edge).
+inline double overshoot_px(const Mask& m, const std::vector<std::uint8_t>& edge) {
   const int W = m.width, H = m.height;
   std::vector<std::uint8_t> in(edge.size()), out(edge.size());
   for (std::size_t q = 0; q < edge.size(); ++q) {
@@ -128,8 +114,7 @@ inline double overshoot_px(const Mask& m, const std::vector<std::uint8_t>& edge,
   return contour_median(m, [&](std::size_t q) {  // s(c); no edge pixel at all: no value
     const double d2 = std::min(d_in[q], d_out[q]);
     if (!std::isfinite(d2)) return std::numeric_limits<double>::quiet_NaN();
-    if (d_in[q] <= d_out[q]) return d_in[q] <= reach * reach ? std::sqrt(d_in[q]) : std::numeric_limits<double>::quiet_NaN();
-    return -std::sqrt(d_out[q]);
+    return d_in[q] <= d_out[q] ? std::sqrt(d_in[q]) : -std::sqrt(d_out[q]);
   });
 }
 // The same from the render (alpha, expected depth) and the depth step delta.

@@ -80,12 +80,11 @@ struct VcarParams {
   // the paper presets. Their text keys (`--set`, JSON, Python) are flat: for_each_field below.
   // Eq. R2-R3, the evidence levels. R3: a Gaussian behind the view's rendered surface,
   // z > (depth / alpha)(p) (1 + depth_tolerance) where alpha(p) >= 0.5, is occluded there
-  // (evidence of the lower "plain" level only). Coarse round: renders of the scene; fine round:
-  // of G_coarse. R2: kappa, the prior weight in views that ties each level's ratio to the one
-  // below.
+  // (evidence of the lower "plain" level only), in both rounds: the coarse round against renders
+  // of the scene, the fine round against renders of G_coarse. R2: kappa, the prior weight in
+  // views that ties each level's ratio to the one below.
   struct Evidence {
-    bool coarse_occlusion = false;
-    bool fine_occlusion = false;
+    bool occlusion = false;
     float kappa = 2.f;
   } evidence;
   // Eq. R6, R6c and R8, the undershoot correction (band 0 = off). R6: in the fine round,
@@ -106,7 +105,7 @@ struct VcarParams {
   // Eq. R10: a fine candidate that no training view sees (the coarse round's occlusion test) is
   // background when more seen background Gaussians than seen selected ones lie on its plane
   // within radius D (D the selection's extent): normals within 5 degrees, plane distance within
-  // the two thicknesses (CoplanarParams). Needs evidence.coarse_occlusion; radius 0 = off.
+  // the two thicknesses (CoplanarParams). Needs evidence.occlusion; radius 0 = off.
   struct Coplanar {
     float radius = 0.f;
   } coplanar;
@@ -114,19 +113,13 @@ struct VcarParams {
   // over depth_tolerance; the render is asked for depth). R11: a mask whose contour lies
   // o_j >= overshoot_min px outside those edges (median over the contour, Eq. R11b) is eroded
   // by o_j + overshoot_margin px before it is voted and kept for ABR: in the coarse round, and in
-  // the fine round once the coarse round eroded a mask; overshoot_min 0 = off. R11b's reach: a
-  // contour pixel whose nearest edge lies inside the mask counts only within overshoot_reach
-  // r_M of it, r_M = sqrt(|M| / pi) the mask's radius (0 = every contour pixel): where the
-  // object touches a neighbour at its own depth the render has no edge there, and the nearest
-  // one, far along the contour, is no evidence of where the mask ends. A contour pixel whose
-  // nearest edge lies outside the mask (a mask that stops short) always counts. R12: a coarse-round mask
-  // that R11 does not erode (o_j < overshoot_min) grows by the covered, depth-continuous pixels
-  // between its contour and the edges, by at most min(-o_j + grow_margin px, grow_max |image
-  // diagonal|, r_M); grow_max 0 = off.
+  // the fine round once the coarse round eroded a mask; overshoot_min 0 = off. R12: a
+  // coarse-round mask that R11 does not erode (o_j < overshoot_min) grows by the covered,
+  // depth-continuous pixels between its contour and the edges, by at most min(-o_j + grow_margin
+  // px, grow_max |image diagonal|, r_M), r_M = sqrt(|M| / pi) the mask's radius; grow_max 0 = off.
   struct Snap {
     float overshoot_min = 0.f;
     float overshoot_margin = 1.5f;
-    float overshoot_reach = 0.f;
     float grow_max = 0.f;
     float grow_margin = 1.f;
   } snap;
@@ -170,8 +163,7 @@ struct VcarParams {
   // strict threshold 0.85 when the fine vote is decisive (R7), ABR on masks widened by their
   // undershoot when it is split, on their own footprints (R8), hidden candidates on a seen
   // background plane dropped (R10), masks that reach 1 px or more past the render's occlusion
-  // edges eroded (R11; R11b's reach is off: measured, not adopted, docs/robust.md), masks that
-  // stop short of them grown to them (R12), and each view
+  // edges eroded (R11), masks that stop short of them grown to them (R12), and each view
   // weighted by how its mask agrees with the round's consensus (R13). What vcar::segment uses
   // when given no parameters. Chosen on the field's tuning seed and the synthetic suite
   // (docs/notes/default-2026-12-02.md): fine threshold 0.7 (0.5 let GrabCut's leaks through,
@@ -180,8 +172,7 @@ struct VcarParams {
   static VcarParams robust() {
     VcarParams p;
     p.tau_fine = 0.7f;
-    p.evidence.fine_occlusion = true;
-    p.evidence.coarse_occlusion = true;
+    p.evidence.occlusion = true;
     p.undershoot.band = 1.5f;
     p.strict.tau = 0.85f;
     p.coplanar.radius = 0.75f;
@@ -213,7 +204,7 @@ struct VcarParams {
 
   // True when a mechanism beyond the paper changes the vote (RobustVoting, Eq. R2-R13).
   bool robust_vote() const {
-    return evidence.fine_occlusion || evidence.coarse_occlusion || undershoot.band > 0.f || reliability.enabled;
+    return evidence.occlusion || undershoot.band > 0.f || reliability.enabled;
   }
 
   // Calls f(name, field) for every field, names exactly as declared (const and non-const).
@@ -232,11 +223,11 @@ struct VcarParams {
     f("background", p.background); f("abr_variant", p.abr_variant);
     f("min_frame_content", p.min_frame_content); f("min_mask_fraction", p.min_mask_fraction);
     f("force_fine_round", p.force_fine_round);
-    f("fine_occlusion", p.evidence.fine_occlusion); f("coarse_occlusion", p.evidence.coarse_occlusion); f("kappa", p.evidence.kappa);
+    f("occlusion", p.evidence.occlusion); f("kappa", p.evidence.kappa);
     f("undershoot_band", p.undershoot.band);
     f("tau_strict", p.strict.tau); f("abr_lowpass", p.abr_lowpass);
     f("coplanar_radius", p.coplanar.radius); f("overshoot_min", p.snap.overshoot_min);
-    f("overshoot_margin", p.snap.overshoot_margin); f("overshoot_reach", p.snap.overshoot_reach);
+    f("overshoot_margin", p.snap.overshoot_margin);
     f("grow_max", p.snap.grow_max); f("grow_margin", p.snap.grow_margin);
     f("view_reliability", p.reliability.enabled);
   }
@@ -280,14 +271,12 @@ struct VcarParams {
     unit("tau_strict", strict.tau);
     if (!(coplanar.radius >= 0.f && coplanar.radius <= 10.f))
       bad("coplanar_radius", "must be in [0, 10] (0 = off), got " + std::to_string(coplanar.radius));
-    if (coplanar.radius > 0.f && !evidence.coarse_occlusion)
-      bad("coplanar_radius", "Eq. R10 reads the coarse round's occlusion test: set coarse_occlusion=true or coplanar_radius=0");
+    if (coplanar.radius > 0.f && !evidence.occlusion)
+      bad("coplanar_radius", "Eq. R10 reads the coarse round's occlusion test: set occlusion=true or coplanar_radius=0");
     if (!(snap.overshoot_min >= 0.f && snap.overshoot_min <= 100.f))
       bad("overshoot_min", "must be in [0, 100] px (0 = off), got " + std::to_string(snap.overshoot_min));
     if (!(snap.overshoot_margin >= 0.f && snap.overshoot_margin <= 100.f))
       bad("overshoot_margin", "must be in [0, 100] px, got " + std::to_string(snap.overshoot_margin));
-    if (!(snap.overshoot_reach >= 0.f && snap.overshoot_reach <= 10.f))
-      bad("overshoot_reach", "must be in [0, 10] mask radii (0 = unlimited), got " + std::to_string(snap.overshoot_reach));
     unit("grow_max", snap.grow_max);
     if (!(snap.grow_margin >= 0.f && snap.grow_margin <= 100.f))
       bad("grow_margin", "must be in [0, 100] px, got " + std::to_string(snap.grow_margin));

@@ -38,7 +38,7 @@ struct FineVerdict {
 class RoundVote {
 public:
   RoundVote(const GaussianScene& scene, const std::vector<Index>* candidates, const VcarParams& p, bool fine)
-      : occlusion_(p.occlusion_aware || (fine ? p.evidence.fine_occlusion : p.evidence.coarse_occlusion)),
+      : occlusion_(p.occlusion_aware || p.evidence.occlusion),
         overshoot_(p.snap.overshoot_min > 0.f), grow_(!fine && p.snap.grow_max > 0.f), undershoot_(fine && p.undershoot.band > 0.f) {
     if (p.robust_vote()) {
       // Eq. R6 needs frames rendered from the candidates alone: the fine round's.
@@ -136,7 +136,7 @@ inline const Mask* edit_mask(const Mask& m, const RenderOutput& render, bool ove
     return static_cast<std::size_t>(std::count_if(x.data.begin(), x.data.end(), [](std::uint8_t v) { return v != 0; }));
   };
   const std::vector<std::uint8_t> edges = occlusion_edges(render.alpha, render.depth, params.depth_tolerance);  // Eq. R11a
-  const double o = overshoot_px(m, edges, overshoot_reach_px(foreground(m), params.snap.overshoot_reach));  // Eq. R11b
+  const double o = overshoot_px(m, edges);  // Eq. R11b
   if (overshoot && o >= static_cast<double>(params.snap.overshoot_min)) {
     scratch = m;
     erode_by_overshoot(scratch, o + static_cast<double>(params.snap.overshoot_margin));  // Eq. R11c
