@@ -169,7 +169,8 @@ std::vector<std::size_t> coplanar_background(const GaussianScene& scene, std::sp
   }
   // f(point) for every point of grid g in the cells within r of a that meet the slab
   // |n_a . (x - mu_a)| <= w (the cell's box: centre c, |n_a . (x - c)| <= cell / 2 sum_d |n_a,d|;
-  // a point of a skipped cell lies farther from a's plane than w, by a margin for rounding).
+  // a point of a skipped cell lies farther from a's plane than w, by a margin for rounding),
+  // until f returns false.
   auto for_each_near = [&](const Grid& g, const detail::PlanePoint& a, float w, auto&& f) {
     const int cx = cell_index(a.mu, 0), cy = cell_index(a.mu, 1), cz = cell_index(a.mu, 2);
     const float half = 0.5f * cell * (std::abs(a.n.x()) + std::abs(a.n.y()) + std::abs(a.n.z())) * 1.001f + w;
@@ -180,7 +181,8 @@ std::vector<std::size_t> coplanar_background(const GaussianScene& scene, std::sp
           const float h = h0 + cell * (a.n.x() * static_cast<float>(x) + a.n.y() * static_cast<float>(y) + a.n.z() * static_cast<float>(z));
           if (std::abs(h) > half) continue;
           const std::size_t c = flat_index(x, y, z);
-          for (std::uint32_t e = g.start[c]; e < g.start[c + 1]; ++e) f(g.points[e]);
+          for (std::uint32_t e = g.start[c]; e < g.start[c + 1]; ++e)
+            if (!f(g.points[e])) return;
         }
   };
 
@@ -196,12 +198,14 @@ std::vector<std::size_t> coplanar_background(const GaussianScene& scene, std::sp
     // within edge_sigma times their largest scale.
     for (int g = 0; g <= 1; ++g)
       for_each_near(grid[g], a, p.slab * (a.t + grid[g].t_max),
-                    [&](const detail::PlanePoint& q) { B += detail::coplanar(a, q, r, cos_alpha, p.slab); });
+                    [&](const detail::PlanePoint& q) { return B += detail::coplanar(a, q, r, cos_alpha, p.slab), true; });
     if (B == 0) return;  // no seen background plane: kept, whatever S
-    for (int g = 2; g <= 3; ++g) {
+    // S is counted only until it reaches B: i is kept from then on (the same verdict, less work).
+    for (int g = 2; g <= 3 && S < B; ++g) {
       const float w = std::max(p.slab * (a.t + grid[g].t_max), p.edge_sigma * grid[g].s_max);
       for_each_near(grid[g], a, w, [&](const detail::PlanePoint& q) {
         S += detail::coplanar(a, q, r, cos_alpha, p.slab) || detail::reaches_edge_on(a, q, r, p.edge_cos, p.edge_sigma);
+        return S < B;
       });
     }
     drop[k] = B > S;                                                                      // Eq. R10
