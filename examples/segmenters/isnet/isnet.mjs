@@ -26,6 +26,7 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import crypto from 'node:crypto';
+import zlib from 'node:zlib';
 import { fileURLToPath } from 'node:url';
 
 const HERE = path.dirname(fileURLToPath(import.meta.url));
@@ -42,6 +43,10 @@ const USAGE = `usage: node isnet.mjs [options] REQUEST_DIR
   --threads N           onnxruntime intra-op threads (default: the number of cores)
   --low-memory          onnxruntime's CPU memory arena off: peak about 1.2 GB instead of
                         1.8 GB, 10-40% slower
+  --cache DIR           keep each cut's mask in DIR, keyed by the SHA-256 of the model, the
+                        threshold, the cut's size and its pixels, and answer an identical cut
+                        from there without inference (for repeated runs on the same renders,
+                        e.g. an ablation; the seconds it reports are then the cache's)
   --help                this text
 
 Follows vcar's external segmenter protocol (docs/cli.md).`;
@@ -53,7 +58,7 @@ class UsageError extends Error {} // exit 64
 function log(msg) { process.stdout.write(`isnet: ${msg}\n`); }
 
 function parseArgs(argv) {
-  const opt = { model: 'medium', margin: 0.2, threshold: 0.5, threads: os.availableParallelism?.() ?? os.cpus().length, lowMemory: false, request: null };
+  const opt = { model: 'medium', margin: 0.2, threshold: 0.5, threads: os.availableParallelism?.() ?? os.cpus().length, lowMemory: false, cache: null, request: null };
   const number = (flag, v, lo, hi) => {
     const x = Number(v);
     if (v === undefined || v === '' || !Number.isFinite(x) || x < lo || x > hi)
@@ -74,6 +79,10 @@ function parseArgs(argv) {
       opt.threads = number(a, args.shift(), 1, 1024);
       if (!Number.isInteger(opt.threads)) throw new UsageError(`--threads needs a whole number, got ${opt.threads}`);
     } else if (a === '--low-memory') opt.lowMemory = true;
+    else if (a === '--cache') {
+      opt.cache = args.shift();
+      if (!opt.cache) throw new UsageError('--cache needs a directory');
+    }
     else if (a.startsWith('-')) throw new UsageError(`unknown option ${a}`);
     else if (opt.request === null) opt.request = a;
     else throw new UsageError(`one request directory expected, got '${opt.request}' and '${a}'`);
@@ -240,6 +249,37 @@ function maskFromProbability(prob, frame, rect, threshold) {
   return { mask, fg };
 }
 
+// ---- the cache (--cache) -------------------------------------------------------------------------
+
+// The cut's key: what the mask depends on (the model, the threshold, the cut's size and pixels).
+function cutKey(opt, rgba, width, rect) {
+  const h = crypto.createHash('sha256');
+  h.update(`isnet ${opt.model} ${opt.threshold} ${rect.w}x${rect.h}\n`);
+  for (let y = rect.y; y < rect.y + rect.h; ++y) h.update(rgba.subarray((y * width + rect.x) * 4, (y * width + rect.x + rect.w) * 4));
+  return h.digest('hex');
+}
+
+// A cached cut's mask (rect.w x rect.h bytes, 0 or 255) as a full-frame mask, or null.
+function readCached(file, frame, rect) {
+  let local;
+  try { local = zlib.gunzipSync(fs.readFileSync(file)); } catch { return null; }
+  if (local.length !== rect.w * rect.h) return null;
+  const mask = new Uint8Array(frame.width * frame.height);
+  let fg = 0;
+  for (let y = 0; y < rect.h; ++y)
+    for (let x = 0; x < rect.w; ++x)
+      if (local[y * rect.w + x]) { mask[(rect.y + y) * frame.width + rect.x + x] = 255; ++fg; }
+  return { mask, fg };
+}
+
+function writeCached(file, frame, rect, mask) {
+  const local = Buffer.alloc(rect.w * rect.h);
+  for (let y = 0; y < rect.h; ++y)
+    for (let x = 0; x < rect.w; ++x) local[y * rect.w + x] = mask[(rect.y + y) * frame.width + rect.x + x];
+  fs.writeFileSync(`${file}.${process.pid}.part`, zlib.gzipSync(local));
+  fs.renameSync(`${file}.${process.pid}.part`, file);
+}
+
 // ---- the model ----------------------------------------------------------------------------------
 
 async function loadModules() {
@@ -282,23 +322,32 @@ async function main(argv) {
   const started = performance.now();
   const { frames, jobs } = readRequest(opt.request); // everything checked before the model loads
   const { ort, PNG } = await loadModules();
-  let session;
-  try {
-    session = await ort.InferenceSession.create(modelBytes(opt.model), {
-      executionProviders: ['cpu'], graphOptimizationLevel: 'all', executionMode: 'sequential',
-      intraOpNumThreads: opt.threads, interOpNumThreads: 1, enableCpuMemArena: !opt.lowMemory,
-    });
-  } catch (e) {
-    if (e instanceof SetupError) throw e;
-    throw new SetupError(`onnxruntime could not load the ${opt.model} model: ${e.message}`);
-  }
-  const inName = session.inputNames[0], outName = session.outputNames[0];
-  log(`${opt.model} model loaded in ${((performance.now() - started) / 1000).toFixed(1)} s, ${opt.threads} threads; ${jobs.length} masks to write for ${frames.length} frames`);
+  // The model, loaded at the first cut the cache does not answer.
+  let loaded = null;
+  const model = async () => {
+    if (loaded) return loaded;
+    const t0 = performance.now();
+    let session;
+    try {
+      session = await ort.InferenceSession.create(modelBytes(opt.model), {
+        executionProviders: ['cpu'], graphOptimizationLevel: 'all', executionMode: 'sequential',
+        intraOpNumThreads: opt.threads, interOpNumThreads: 1, enableCpuMemArena: !opt.lowMemory,
+      });
+    } catch (e) {
+      if (e instanceof SetupError) throw e;
+      throw new SetupError(`onnxruntime could not load the ${opt.model} model: ${e.message}`);
+    }
+    log(`${opt.model} model loaded in ${((performance.now() - t0) / 1000).toFixed(1)} s, ${opt.threads} threads`);
+    loaded = { session, inName: session.inputNames[0], outName: session.outputNames[0] };
+    return loaded;
+  };
+  if (!opt.cache) await model();  // without a cache, a setup fault shows before any mask
+  log(`${jobs.length} masks to write for ${frames.length} frames`);
 
   const decoded = new Map(); // frame -> RGBA pixels (kept while a later job needs the frame)
   const lastUse = new Map(jobs.map((j, i) => [j.frame, i]));
   const done = new Map(); // "frame:x,y,w,h" -> mask: one inference per distinct cut
-  let inferences = 0, inferSeconds = 0;
+  let inferences = 0, inferSeconds = 0, cacheHits = 0;
   for (const [i, job] of jobs.entries()) {
     const frame = frames[job.frame];
     const rect = cutRect(job.box, frame, opt.margin);
@@ -312,18 +361,31 @@ async function main(argv) {
         rgba = png.data;
         decoded.set(job.frame, rgba);
       }
-      const t = performance.now(), cpu = process.cpuUsage();
-      const x = new ort.Tensor('float32', inputTensor(rgba, frame.width, rect), [1, 3, SIZE, SIZE]);
-      let out;
-      try { out = (await session.run({ [inName]: x }, [outName]))[outName]; } catch (e) { throw new SetupError(`inference failed on frame ${job.frame}: ${e.message}`); }
-      if (out.data.length !== SIZE * SIZE) throw new SetupError(`the model's output has ${out.data.length} values, expected ${SIZE * SIZE}`);
-      result = maskFromProbability(out.data, frame, rect, opt.threshold);
-      const s = (performance.now() - t) / 1000;
-      const c = process.cpuUsage(cpu), cpuSeconds = (c.user + c.system) / 1e6;
-      ++inferences; inferSeconds += s;
+      const cached = opt.cache ? path.join(opt.cache, `${cutKey(opt, rgba, frame.width, rect)}.gz`) : null;
+      result = cached ? readCached(cached, frame, rect) : null;
+      if (result) {
+        ++cacheHits;
+        log(`frame ${job.frame} (${frame.stem}) cut ${rect.w}x${rect.h} at ${rect.x},${rect.y}: from the cache, ` +
+          `${(100 * result.fg / (frame.width * frame.height)).toFixed(1)}% foreground`);
+      } else {
+        const { session, inName, outName } = await model();
+        const t = performance.now(), cpu = process.cpuUsage();
+        const x = new ort.Tensor('float32', inputTensor(rgba, frame.width, rect), [1, 3, SIZE, SIZE]);
+        let out;
+        try { out = (await session.run({ [inName]: x }, [outName]))[outName]; } catch (e) { throw new SetupError(`inference failed on frame ${job.frame}: ${e.message}`); }
+        if (out.data.length !== SIZE * SIZE) throw new SetupError(`the model's output has ${out.data.length} values, expected ${SIZE * SIZE}`);
+        result = maskFromProbability(out.data, frame, rect, opt.threshold);
+        const s = (performance.now() - t) / 1000;
+        const c = process.cpuUsage(cpu), cpuSeconds = (c.user + c.system) / 1e6;
+        ++inferences; inferSeconds += s;
+        if (cached) {
+          fs.mkdirSync(opt.cache, { recursive: true });
+          writeCached(cached, frame, rect, result.mask);
+        }
+        log(`frame ${job.frame} (${frame.stem}) ${job.box ? `box ${JSON.stringify(job.box)}` : 'whole frame'}, cut ${rect.w}x${rect.h} at ${rect.x},${rect.y}: ` +
+          `${(100 * result.fg / (frame.width * frame.height)).toFixed(1)}% foreground, ${s.toFixed(1)} s (CPU ${cpuSeconds.toFixed(1)} s)`);
+      }
       done.set(key, result);
-      log(`frame ${job.frame} (${frame.stem}) ${job.box ? `box ${JSON.stringify(job.box)}` : 'whole frame'}, cut ${rect.w}x${rect.h} at ${rect.x},${rect.y}: ` +
-        `${(100 * result.fg / (frame.width * frame.height)).toFixed(1)}% foreground, ${s.toFixed(1)} s (CPU ${cpuSeconds.toFixed(1)} s)`);
     }
     if (lastUse.get(job.frame) === i) decoded.delete(job.frame);
     // Written under another name, then renamed: vcar counts the finished NNNNN.png files.
@@ -334,7 +396,8 @@ async function main(argv) {
     fs.writeFileSync(`${file}.part`, png);
     fs.renameSync(`${file}.part`, file);
   }
-  log(`${jobs.length} masks, ${inferences} inferences (${inferences ? (inferSeconds / inferences).toFixed(1) : 0} s each), ` +
+  log(`${jobs.length} masks, ${inferences} inferences (${inferences ? (inferSeconds / inferences).toFixed(1) : 0} s each)` +
+    `${opt.cache ? `, ${cacheHits} from the cache` : ''}, ` +
     `${((performance.now() - started) / 1000).toFixed(1)} s in all`);
 }
 

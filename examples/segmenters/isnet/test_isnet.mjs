@@ -14,6 +14,7 @@
 //   objects:  a: boxes on [A|B] and [B|A] -> A left, A right (masks/a/); b: asked about frame 1
 //             only, its "box" there -> B left (masks/b/00001.png only); c: a's cut of frame 0
 //             -> the same mask, segmented once (4 masks, 3 inferences)
+//   cache:    the boxes request again with --cache: its mask read back, no model loaded
 // Each mask's IoU with its ground truth must reach MIN_IOU (below). Bad requests (boxes of the
 // wrong length, a missing frame, a frame of the wrong size, bad JSON) must fail with status 2 and
 // a message naming the fault. No mask may be left under a temporary name.
@@ -177,18 +178,28 @@ function check(dir, expected) { // expected: [stem, gt or null (no file)]
     if (v < MIN_IOU) fail(`${file} (${what}): IoU ${v.toFixed(4)} < ${MIN_IOU}`);
   }
 }
-function segment(name, frames, prompt) {
+function segment(name, frames, prompt, extra = []) {
   const d = request(name, frames, prompt);
   for (const o of prompt.objects ?? []) fs.mkdirSync(path.join(d, 'masks', o.name)); // as vcar does
-  const p = run(d);
+  const p = run(d, extra);
   if (p.status !== 0) fail(`${name} request: status ${p.status}: ${p.out}`);
   process.stdout.write(p.out);
   return { dir: d, out: p.out };
 }
-{ // "boxes": one per frame, null = no mask
+{ // "boxes": one per frame, null = no mask; with --cache, then the same request again, answered
+  // from the cache: no model, no inference, the same bytes
   const f0 = frame('A', 'B', [0]), f1 = frame('A', 'B', []);
-  const { dir } = segment('boxes', [f0, f1], { box: boxAt('A', 0), boxes: [boxAt('A', 0), null] });
+  const cache = path.join(WORK, 'cache');
+  const prompt = { box: boxAt('A', 0), boxes: [boxAt('A', 0), null] };
+  const { dir } = segment('boxes', [f0, f1], prompt, ['--cache', cache]);
   check(dir, [['00000', f0.gt, 'box on A, left'], ['00001', null, 'null box']]);
+  if (fs.readdirSync(cache).filter((f) => /^[0-9a-f]{64}\.gz$/.test(f)).length !== 1) fail(`${cache}: expected one cached cut, holds [${fs.readdirSync(cache)}]`);
+  const again = segment('boxes_cached', [f0, f1], prompt, ['--cache', cache]);
+  if (!again.out.includes('1 masks, 0 inferences (0 s each), 1 from the cache') || again.out.includes('model loaded'))
+    fail(`boxes_cached: expected the mask from the cache without the model, the log says: ${again.out.trim()}`);
+  if (!fs.readFileSync(path.join(again.dir, 'masks', '00000.png')).equals(fs.readFileSync(path.join(dir, 'masks', '00000.png'))))
+    fail('boxes_cached: the cached mask differs from the inferred one');
+  if (fs.existsSync(path.join(again.dir, 'masks', '00001.png'))) fail('boxes_cached: a mask for the null box');
 }
 { // no "boxes": "box" on frame 0, the whole frame elsewhere
   const f0 = frame('B', 'A', [0]), f1 = frame('A', 'B', [0, 1]);
