@@ -357,8 +357,16 @@ TEST_CASE("Eq. R8: ABR reads the training masks widened by their undershoot only
     return vcar::segment(w.scene, cams, prompt, renderer, seg, p).diagnostics;
   };
   // Masks 5 px inside the render: blob A's rim falls outside them in every view, the vote splits.
+  // Eq. R6d: their median undershoot is positive, so the round's threshold is undershoot.tau.
   const vcar::Diagnostics eroded = run(5);
-  REQUIRE(eroded.tau_fine_applied == p.tau_fine);
+  REQUIRE(eroded.tau_fine_applied == p.undershoot.tau);
+  p.undershoot.tau = 0.6f;
+  CHECK(run(5).tau_fine_applied == 0.6f);
+  // R6d off: R7 weighs tau_strict against tau_fine (0.8), and against 0.8 these masks' vote is
+  // decisive (the rim sits between 0.7 and 0.8).
+  p.undershoot.tau = 0.f;
+  CHECK(run(5).tau_fine_applied == p.strict.tau);
+  p.undershoot.tau = vcar::VcarParams::robust().undershoot.tau;
   CHECK(eroded.abr_masks_widened == cams.size());  // every training view has an undershooting mask
   // Exact masks: a decisive vote, ABR reads them as they are.
   const vcar::Diagnostics exact = run(0);

@@ -26,7 +26,7 @@ struct Diagnostics {
   double max_gap_deg = 0;           // Delta_max (Eq. 6)
   Eigen::Vector3f gap_direction = Eigen::Vector3f::Zero();
   bool sss_triggered = false;
-  float tau_fine_applied = 0.f;     // the fine round's threshold (Eq. R7: tau_fine or tau_strict); 0: no fine round
+  float tau_fine_applied = 0.f;     // the fine round's threshold (Eq. R6d-R7: tau_fine, undershoot.tau or tau_strict); 0: no fine round
   bool undershoot_applied = false;  // Eq. R6 shaped the fine vote (on, and its gate R6c found the vote without it split)
   std::vector<Camera> sampled_cameras;  // V_sampled
   ObjectSphere sphere{};

@@ -195,6 +195,7 @@ public:
       train_masks_[order_[t]] = m && params_.enable_abr ? std::optional<RleMask>(RleMask::encode(*m)) : std::nullopt;
       undershoot_[order_[t]] = m ? fine_->last_undershoot_px() : 0.0;
     }
+    if (m) round_undershoot_.push_back(fine_->last_undershoot_px());
   }
 
   // After the round: its timings (render, segmenter, voting) and the fine selection (Eq. 3, R7).
@@ -203,8 +204,11 @@ public:
     timing("fine_segment", segment_s);
     timing("fine_voting", voting_s);
     diag_.overshoot_eroded += fine_->overshoot_eroded();
-    fine_->weigh_views(params_.tau_fine);  // Eq. R13
-    verdict_ = fine_->selected(params_.tau_fine, params_.strict.tau, split_fraction, selected_, scores_);
+    const float tau = params_.undershoot.band > 0.f  // Eq. R6d
+                          ? undershoot_threshold(std::move(round_undershoot_), params_.tau_fine, params_.undershoot.tau)
+                          : params_.tau_fine;
+    fine_->weigh_views(tau);  // Eq. R13
+    verdict_ = fine_->selected(tau, params_.strict.tau, split_fraction, selected_, scores_);
     diag_.tau_fine_applied = verdict_.tau;
     diag_.undershoot_applied = verdict_.undershoot;
     diag_.n_fine = diag_.n_final = selected_.size();
@@ -263,6 +267,7 @@ private:
   Diagnostics& diag_;
   std::vector<std::size_t> order_;  // frame k of a round -> training view
   std::vector<double> undershoot_;  // Eq. R6a of each training view's fine-round mask (px)
+  std::vector<double> round_undershoot_;  // Eq. R6a of every masked fine frame (px), for R6d
   FineVerdict verdict_;             // the fine vote's (Eq. R7, R6c); none without a fine round
   std::vector<Index> coarse_set_;   // G_coarse, the fine round's renders
   std::vector<Camera> fine_frames_;

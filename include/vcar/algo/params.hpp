@@ -92,13 +92,17 @@ struct VcarParams {
   // measured against the render of G_coarse (R6a); R6c: only where the vote without it is split
   // (Eq. R7), so a decisive vote without it is the result. R8: when the fine vote is split, ABR
   // reads each training view's mask widened by e_j, and the Gaussians' own footprints (no
-  // low-pass). R6c and R8 need R7.
+  // low-pass). R6c and R8 need R7. R6d: the fine round's threshold is tau (in place of
+  // tau_fine) when the median e_j of its masked frames is positive (0 = off; it reads R6a, so
+  // it acts only where band > 0).
   struct Undershoot {
     float band = 0.f;
+    float tau = 0.f;
   } undershoot;
-  // Eq. R7, the strict threshold: the fine round keeps tau instead of tau_fine when the vote is
-  // decisive, i.e. when at most a fraction 0.1 (split_fraction, decisive_threshold.hpp) of the
-  // Gaussians kept at tau_fine fall below tau; tau <= tau_fine (0) = off.
+  // Eq. R7, the strict threshold: the fine round keeps tau instead of its threshold (tau_fine, or
+  // R6d's undershoot.tau) when the vote is decisive, i.e. when at most a fraction 0.1
+  // (split_fraction, decisive_threshold.hpp) of the Gaussians kept at that threshold fall below
+  // tau; tau <= that threshold (0) = off.
   struct Strict {
     float tau = 0.f;
   } strict;
@@ -157,23 +161,25 @@ struct VcarParams {
     p.force_fine_round = true;
     return p;
   }
-  // vcar's default (beyond the paper, docs/robust.md): tau_coarse 0.5, tau_fine 0.7, the
-  // evidence levels (R2) with the occlusion test in both rounds (R3), the fine round's band as
-  // wide as the masks' measured undershoot (R6) where the vote without it splits (R6c), the
-  // strict threshold 0.85 when the fine vote is decisive (R7), ABR on masks widened by their
-  // undershoot when it is split, on their own footprints (R8), hidden candidates on a seen
-  // background plane dropped (R10), masks that reach 1 px or more past the render's occlusion
-  // edges eroded (R11), masks that stop short of them grown to them (R12), and each view
-  // weighted by how its mask agrees with the round's consensus (R13). What vcar::segment uses
-  // when given no parameters. Chosen on the field's tuning seed and the synthetic suite
-  // (docs/notes/default-2026-12-02.md): fine threshold 0.7 (0.5 let GrabCut's leaks through,
-  // 0.8 lost eroded masks' rims), R13 on (SAM-like drift). (R1, R4, R5 and R9 were
-  // removed: inert in every preset, or never better on the field; docs/robust.md, appendix.)
+  // vcar's default (beyond the paper, docs/robust.md): the paper's thresholds (tau_coarse 0.5,
+  // tau_fine 0.8), the evidence levels (R2) with the occlusion test in both rounds (R3), the fine
+  // round's band as wide as the masks' measured undershoot (R6) where the vote without it splits
+  // (R6c), the fine threshold 0.7 where the round's masks undershoot (R6d), the strict threshold
+  // 0.85 when the fine vote is decisive (R7), ABR on masks widened by their undershoot when it is
+  // split, on their own footprints (R8), hidden candidates on a seen background plane dropped
+  // (R10), masks that reach 1 px or more past the render's occlusion edges eroded (R11), masks
+  // that stop short of them grown to them (R12), and each view weighted by how its mask agrees
+  // with the round's consensus (R13). What vcar::segment uses when given no parameters. Chosen on
+  // the field's tuning seed and the synthetic suite (docs/notes/default-2026-12-02.md; R6d on
+  // ISNet's guitar, docs/notes/default-2026-12-03.md): 0.7 where masks undershoot (0.5 let
+  // GrabCut's leaks through, 0.8 lost eroded masks' rims), the paper's 0.8 where they do not
+  // (ISNet's floor patches), R13 on (SAM-like drift). (R1, R4, R5 and R9 were removed: inert in
+  // every preset, or never better on the field; docs/robust.md, appendix.)
   static VcarParams robust() {
     VcarParams p;
-    p.tau_fine = 0.7f;
     p.evidence.occlusion = true;
     p.undershoot.band = 1.5f;
+    p.undershoot.tau = 0.7f;
     p.strict.tau = 0.85f;
     p.coplanar.radius = 0.75f;
     p.snap.overshoot_min = 1.f;
@@ -224,7 +230,7 @@ struct VcarParams {
     f("min_frame_content", p.min_frame_content); f("min_mask_fraction", p.min_mask_fraction);
     f("force_fine_round", p.force_fine_round);
     f("occlusion", p.evidence.occlusion); f("kappa", p.evidence.kappa);
-    f("undershoot_band", p.undershoot.band);
+    f("undershoot_band", p.undershoot.band); f("undershoot_tau", p.undershoot.tau);
     f("tau_strict", p.strict.tau); f("abr_lowpass", p.abr_lowpass);
     f("coplanar_radius", p.coplanar.radius); f("overshoot_min", p.snap.overshoot_min);
     f("overshoot_margin", p.snap.overshoot_margin);
@@ -268,6 +274,7 @@ struct VcarParams {
     if (!(evidence.kappa >= 0.f && std::isfinite(evidence.kappa))) bad("kappa", "must be >= 0, got " + std::to_string(evidence.kappa));
     if (!(undershoot.band >= 0.f && undershoot.band <= 100.f))
       bad("undershoot_band", "must be in [0, 100] (0 = off), got " + std::to_string(undershoot.band));
+    unit("undershoot_tau", undershoot.tau);
     unit("tau_strict", strict.tau);
     if (!(coplanar.radius >= 0.f && coplanar.radius <= 10.f))
       bad("coplanar_radius", "must be in [0, 10] (0 = off), got " + std::to_string(coplanar.radius));
