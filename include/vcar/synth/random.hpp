@@ -36,7 +36,10 @@ public:
   // Uniform in [0, 1) with 24 random bits (exact in float).
   float uniform() { return static_cast<float>(next_u64() >> 40) * (1.f / 16777216.f); }
   double uniform_d() { return static_cast<double>(next_u64() >> 11) * (1.0 / 9007199254740992.0); }
-  float uniform(float lo, float hi) { return lo + (hi - lo) * uniform(); }
+  // In [lo, hi): the product of two floats is exact in double, so the sum is rounded once
+  // whether or not the compiler contracts it into a fused multiply-add (float a * b + c is not:
+  // one translation unit fused it and another did not, and their worlds differed by an ulp).
+  float uniform(float lo, float hi) { return static_cast<float>(lo + static_cast<double>(hi - lo) * uniform()); }
   // Integer in [lo, hi] inclusive.
   int uniform_int(int lo, int hi) {
     const std::uint64_t span = static_cast<std::uint64_t>(hi - lo) + 1;
