@@ -235,13 +235,15 @@ TEST_CASE("reference_code's empty-frame filter drops near-empty training frames 
   CHECK(r.diagnostics.sss_triggered);
 }
 
-TEST_CASE("robust preset: fine-round frames render a subset (FrameSequence::subset) and depth comes with them") {
+TEST_CASE("robust preset: fine-round frames render a subset (FrameSequence::subset); depth comes with the coarse round's") {
   auto w = two_blobs();
   const auto cams = forward_rig();
-  int depth_requests = 0, renders = 0;
+  int depth_requests = 0, renders = 0, coarse_renders = 0, fine_depth = 0;
   auto renderer = vcar::make_renderer([&](const vcar::RenderRequest& q) {
     ++renders;
     depth_requests += q.want_depth;
+    coarse_renders += q.subset == nullptr;
+    fine_depth += q.subset != nullptr && q.want_depth;
     vcar::RenderOutput out;
     out.rgb = vcar::ImageF(q.camera->width, q.camera->height, 3, 0.f);
     out.alpha = vcar::ImageF(q.camera->width, q.camera->height, 1, 0.f);
@@ -263,9 +265,13 @@ TEST_CASE("robust preset: fine-round frames render a subset (FrameSequence::subs
   const auto r = vcar::segment(w.scene, cams, prompt, renderer, seg);  // default: VcarParams::robust()
   CHECK(subset_flags == std::vector<bool>{false, true});
   CHECK(same_set(r.indices, w.a));
-  // Every frame rendered once for the segmenter, with depth (the occlusion test of both rounds);
-  // the lambda answers all frames before voting, so the occlusion test renders depth again.
-  CHECK(depth_requests == renders);
+  // Every frame rendered once for the segmenter; the coarse round's with depth (Eq. R3, R11,
+  // R12); the lambda answers all frames before voting, so the vote renders them again. The fine
+  // round's renders of G_coarse carry no depth: Eq. R3 is the coarse round's, and Eq. R6 reads
+  // alpha (Eq. R11 would ask for it, but no coarse mask here overshoots).
+  CHECK(coarse_renders >= static_cast<int>(cams.size()));
+  CHECK(depth_requests == coarse_renders);
+  CHECK(fine_depth == 0);
   CHECK(renders >= static_cast<int>(cams.size() + cams.size() + 32));
 }
 

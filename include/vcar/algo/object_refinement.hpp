@@ -117,7 +117,7 @@ inline bool drop_coplanar_background(const GaussianScene& scene, std::vector<Ind
 // (Eq. 7-8), ABR (Eq. 9-14). In steps, so that several objects can share one segmenter call
 // for their fine rounds (the CLI's several-objects run):
 //   start()      sphere, view completeness, V_sampled and the fine round's frames;
-//   has_round()  whether a fine round runs; then frames(), coarse_set(), wants_depth() and one
+//   has_round()  whether a fine round runs; then frames(), coarse_set(), render_need() and one
 //                on_mask(frame, mask, render) per frame, then end_round();
 //   finish()     Eq. R10, R8 and ABR: fills the result.
 // start(), end_round() and finish() return false when a stage selected nothing
@@ -183,7 +183,7 @@ public:
   bool has_round() const { return fine_.has_value(); }
   const std::vector<Camera>& frames() const { return fine_frames_; }  // reference view first
   const std::vector<Index>& coarse_set() const { return coarse_set_; }
-  bool wants_depth() const { return fine_ && fine_->wants_depth(); }
+  RenderNeed render_need() const { return fine_ ? fine_->render_need() : RenderNeed{}; }
 
   // The mask of fine frame k (null: none); `render` of that frame (depth and alpha) when the
   // round kept it, else vote() renders it.
@@ -289,7 +289,7 @@ bool refine(const GaussianScene& scene, const std::vector<Camera>& train_cameras
     const RoundTimes t = run_round(
         fine_round, scene, &r.coarse_set(), r.frames(), prompt, renderer, segmenter, params, progress, t_start,
         [&](std::size_t k, const Mask* m, const RenderOutput* render) { r.on_mask(k, m, render, renderer); },
-        result.diagnostics.masks_missing, r.wants_depth());
+        result.diagnostics.masks_missing, r.render_need());
     if (!r.end_round(t.render, t.total - t.render - t.voting, t.voting)) return false;
   }
   return r.finish(progress, t_start, coarse_seen);

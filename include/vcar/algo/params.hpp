@@ -80,9 +80,11 @@ struct VcarParams {
   // the paper presets. Their text keys (`--set`, JSON, Python) are flat: for_each_field below.
   // Eq. R2-R3, the evidence levels. R3: a Gaussian behind the view's rendered surface,
   // z > (depth / alpha)(p) (1 + depth_tolerance) where alpha(p) >= 0.5, is occluded there
-  // (evidence of the lower "plain" level only), in both rounds: the coarse round against renders
-  // of the scene, the fine round against renders of G_coarse. R2: kappa, the prior weight in
-  // views that ties each level's ratio to the one below.
+  // (evidence of the lower "plain" level only), in the coarse round, against renders of the
+  // scene (the fine round's frames are renders of G_coarse: a candidate hidden there lies behind
+  // other candidates, whose label it shares more often than not, so there every visible centre
+  // counts; docs/robust.md, R3). R2: kappa, the prior weight in views that ties each level's
+  // ratio to the one below.
   struct Evidence {
     bool occlusion = false;
     float kappa = 2.f;
@@ -162,7 +164,7 @@ struct VcarParams {
     return p;
   }
   // vcar's default (beyond the paper, docs/robust.md): the paper's thresholds (tau_coarse 0.5,
-  // tau_fine 0.8), the evidence levels (R2) with the occlusion test in both rounds (R3), the fine
+  // tau_fine 0.8), the evidence levels (R2) with the occlusion test in the coarse round (R3), the fine
   // round's band as wide as the masks' measured undershoot (R6) where the vote without it splits
   // (R6c), the fine threshold 0.7 where the round's masks undershoot (R6d), the strict threshold
   // 0.85 when the fine vote is decisive (R7), ABR on masks widened by their undershoot when it is

@@ -94,7 +94,7 @@ SegmentationResult segment(const GaussianScene& scene, const std::vector<Camera>
       t_start, [&](std::size_t k, const Mask* m, const RenderOutput* render) {
         m = detail::vote(coarse, frames[k], usable(m), render, scene, nullptr, renderer, params, scratch);
         keep_training_mask(k, m);
-      }, diag.masks_missing, coarse.wants_depth());
+      }, diag.masks_missing, coarse.render_need());
   timing("coarse_render", t1.render);
   timing("coarse_segment", t1.total - t1.render - t1.voting);
   timing("coarse_voting", setup + t1.voting);

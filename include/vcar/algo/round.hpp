@@ -79,21 +79,28 @@ struct RoundTimes {
   double render = 0, voting = 0, total = 0;
 };
 
+// What a round's vote reads of each frame's render: kept (alpha, for Eq. R3, R6, R11, R12) and
+// with depth (Eq. R3, R11, R12).
+struct RenderNeed {
+  bool kept = false;
+  bool depth = false;
+};
+
 // One segmentation round: renders frames on demand from `subset` (null = whole scene), streams
 // each mask into `on_mask(frame, mask, render)`, validates sizes, maps segmenter failures to
-// errors. With `keep_depth` the frame's render asks for depth too and the latest one is handed
-// to on_mask when its mask arrives (else `render` is null): a segmenter that asks for a frame
-// just before answering it costs one render per frame, depth included.
+// errors. With `need.kept` the latest render (with depth when `need.depth`) is handed to on_mask
+// when its mask arrives (else `render` is null): a segmenter that asks for a frame just before
+// answering it costs one render per frame, depth included.
 template <Renderer R, Segmenter S, class OnMask>
 RoundTimes run_round(std::string_view round, const GaussianScene& scene,
                      const std::vector<Index>* subset, std::span<const Camera> frames,
                      const Prompt& prompt, R& renderer, S& segmenter, const VcarParams& params,
                      const ProgressCallback& progress, Clock::time_point t_start, OnMask&& on_mask,
-                     std::size_t& masks_missing, bool keep_depth = false) {
+                     std::size_t& masks_missing, RenderNeed need = {}) {
   RoundTimes t;
   const auto t0 = Clock::now();
   std::vector<bool> seen(frames.size(), false);
-  std::optional<std::pair<std::size_t, RenderOutput>> last;  // the latest render, when keep_depth
+  std::optional<std::pair<std::size_t, RenderOutput>> last;  // the latest render, when need.kept
   FrameSequence seq;
   seq.cameras = frames;
   seq.subset = subset != nullptr;
@@ -101,9 +108,9 @@ RoundTimes run_round(std::string_view round, const GaussianScene& scene,
   seq.image = [&](std::size_t k) -> ImageRGB8 {
     if (k >= frames.size()) throw Error("frame " + std::to_string(k) + " out of range", std::string(round));
     const auto tr = Clock::now();
-    RenderOutput out = render_view(renderer, scene, frames[k], subset, params.background, keep_depth);
+    RenderOutput out = render_view(renderer, scene, frames[k], subset, params.background, need.kept && need.depth);
     ImageRGB8 img = to_8bit(out.rgb);
-    if (keep_depth) last.emplace(k, std::move(out));
+    if (need.kept) last.emplace(k, std::move(out));
     t.render += seconds_since(tr);
     return img;
   };

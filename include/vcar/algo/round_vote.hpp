@@ -38,7 +38,7 @@ struct FineVerdict {
 class RoundVote {
 public:
   RoundVote(const GaussianScene& scene, const std::vector<Index>* candidates, const VcarParams& p, bool fine)
-      : occlusion_(p.occlusion_aware || p.evidence.occlusion),
+      : occlusion_(p.occlusion_aware || (p.evidence.occlusion && !fine)),  // Eq. R3: coarse round only
         overshoot_(p.snap.overshoot_min > 0.f), grow_(!fine && p.snap.grow_max > 0.f), undershoot_(fine && p.undershoot.band > 0.f) {
     if (p.robust_vote()) {
       // Eq. R6 needs frames rendered from the candidates alone: the fine round's.
@@ -55,8 +55,11 @@ public:
   std::span<const std::uint16_t> unoccluded_views() const {
     return robust_ ? robust_->unoccluded_views() : std::span<const std::uint16_t>{};
   }
-  // The view's render is needed: depth and alpha for Eq. R3, R11 and R12, alpha for Eq. R6.
-  bool wants_depth() const { return occlusion_ || overshoot_ || grow_ || undershoot_; }
+  // The view's render is needed: depth and alpha for Eq. R3, R11 and R12 (wants_depth), alpha
+  // for Eq. R6.
+  bool wants_render() const { return wants_depth() || undershoot_; }
+  bool wants_depth() const { return occlusion_ || overshoot_ || grow_; }
+  RenderNeed render_need() const { return {wants_render(), wants_depth()}; }
   bool occlusion() const { return occlusion_; }
   bool overshoot() const { return overshoot_; }
   bool grow() const { return grow_; }
@@ -71,7 +74,7 @@ public:
   // Eq. R6a of the latest view (0 when R6 is off or the view had no mask or render).
   double last_undershoot_px() const { return robust_ && undershoot_ ? robust_->last_undershoot_px() : 0.0; }
 
-  // One view; `render` (depth + alpha) when wants_depth().
+  // One view; `render` when wants_render() (alpha, and depth when wants_depth()).
   void add_view(const Camera& cam, const Mask* m, const RenderOutput* render, float tolerance) {
     const ImageF* depth = render && occlusion_ ? &render->depth : nullptr;
     const ImageF* alpha = render ? &render->alpha : nullptr;
@@ -91,17 +94,27 @@ public:
     paper_->selected(tau, indices, scores);
   }
   // The same with Eq. R7 choosing between tau and tau_strict (> tau; else tau): the verdict.
-  // With R6's gate, R7 reads the vote without R6 first: when that vote is decisive it is the
-  // result; when it splits, the vote with R6 decides as above (Eq. R6c).
+  // With R6's gate, R7 reads the vote without R6 first: when that vote keeps at tau at least
+  // (1 - split) of what the vote with R6 keeps there and is decisive, it is the result;
+  // otherwise the vote with R6 decides as above (Eq. R6c).
   FineVerdict selected(float tau, float tau_strict, float split, std::vector<Index>& indices,
                        std::vector<float>& scores) const {
-    if (undershoot_ && tau_strict > tau && decided(tau, tau_strict, split, indices, scores, false) == tau_strict)
-      return {tau_strict, false, false};                                                     // Eq. R6c
+    if (undershoot_ && tau_strict > tau &&
+        plain_vote_decides(kept(tau, false), kept(tau_strict, false), kept(tau, true), split)) {  // Eq. R6c
+      selected(tau_strict, indices, scores, false);
+      return {tau_strict, false, false};
+    }
     const float applied = decided(tau, tau_strict, split, indices, scores, true);
     return {applied, tau_strict > tau && applied == tau, undershoot_};
   }
 
 private:
+  // Candidates whose score (with or without Eq. R6) is at least tau.
+  std::size_t kept(float tau, bool undershoot) const {
+    std::size_t n = 0;
+    for (std::size_t k = 0; k < robust_->size(); ++k) n += robust_->kept(k, tau, undershoot);
+    return n;
+  }
   float decided(float tau, float tau_strict, float split, std::vector<Index>& indices, std::vector<float>& scores,
                 bool undershoot) const {
     selected(tau, indices, scores, undershoot);
@@ -155,21 +168,21 @@ inline const Mask* edit_mask(const Mask& m, const RenderOutput& render, bool ove
   return &m;
 }
 
-// One vote of one view. With the occlusion test (or Eq. R11, R12) the view's expected depth comes
-// from `render` when the round kept it, else it is rendered from the same Gaussians the
-// segmenter saw; the mask is edited by Eq. R11, R12 (edit_mask) and the edits counted.
+// One vote of one view. With the occlusion test (or Eq. R11, R12) the view's expected depth (with
+// Eq. R6 alone its alpha) comes from `render` when the round kept it, else it is rendered from
+// the same Gaussians the segmenter saw; the mask is edited by Eq. R11, R12 (edit_mask) and the edits counted.
 // Returns the mask voted (m, &scratch or null): the one the caller keeps for ABR.
 template <Renderer R>
 const Mask* vote(RoundVote& voting, const Camera& cam, const Mask* m, const RenderOutput* render,
                  const GaussianScene& scene, const std::vector<Index>* subset, R& renderer, const VcarParams& params,
                  Mask& scratch) {
-  if (!voting.wants_depth() || !m) {
+  if (!voting.wants_render() || !m) {
     voting.add_view(cam, m, nullptr, params.depth_tolerance);
     return m;
   }
   RenderOutput own;
-  if (!render || render->depth.empty()) {
-    own = render_view(renderer, scene, cam, subset, Eigen::Vector3f::Zero(), true);
+  if (!render || (voting.wants_depth() && render->depth.empty())) {
+    own = render_view(renderer, scene, cam, subset, Eigen::Vector3f::Zero(), voting.wants_depth());
     render = &own;
   }
   if (render->depth.empty() && voting.occlusion())

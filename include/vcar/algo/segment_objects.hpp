@@ -117,10 +117,11 @@ void refine_objects(const GaussianScene& scene, const std::vector<Camera>& train
       if (k >= frames.size()) throw Error("frame " + std::to_string(k) + " out of range", "fine round (all objects)");
       const std::size_t o = owner[k];
       const auto tr = Clock::now();
-      const bool depth = refine[o]->wants_depth();
-      RenderOutput r = render_view(renderer, scene, frames[k], &refine[o]->coarse_set(), params.background, depth);
+      const RenderNeed need = refine[o]->render_need();
+      RenderOutput r = render_view(renderer, scene, frames[k], &refine[o]->coarse_set(), params.background,
+                                   need.kept && need.depth);
       ImageRGB8 img = to_8bit(r.rgb);
-      if (depth) last.emplace(k, std::move(r));
+      if (need.kept) last.emplace(k, std::move(r));
       t_render[o] += seconds_since(tr);
       return img;
     };
