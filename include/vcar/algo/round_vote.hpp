@@ -38,11 +38,13 @@ struct FineVerdict {
 class RoundVote {
 public:
   RoundVote(const GaussianScene& scene, const std::vector<Index>* candidates, const VcarParams& p, bool fine)
-      : occlusion_(p.occlusion_aware || (p.evidence.occlusion && !fine)),  // Eq. R3: coarse round only
+      : occlusion_(p.occlusion_aware || p.evidence.occlusion),
         overshoot_(p.snap.overshoot_min > 0.f), grow_(!fine && p.snap.grow_max > 0.f), undershoot_(fine && p.undershoot.band > 0.f) {
     if (p.robust_vote()) {
       // Eq. R6 needs frames rendered from the candidates alone: the fine round's.
-      const RobustVoteOptions o{p.evidence.kappa, undershoot_ ? p.undershoot.band : 0.f, p.reliability.enabled};
+      // Eq. R3c: in the fine round (renders of G_coarse) R3 may lower a ratio, never raise it.
+      const RobustVoteOptions o{p.evidence.kappa, undershoot_ ? p.undershoot.band : 0.f, p.reliability.enabled,
+                                fine && p.evidence.occlusion};
       if (candidates) robust_.emplace(scene, *candidates, o);
       else robust_.emplace(scene, o);
     } else if (candidates) {
