@@ -235,7 +235,7 @@ TEST_CASE("reference_code's empty-frame filter drops near-empty training frames 
   CHECK(r.diagnostics.sss_triggered);
 }
 
-TEST_CASE("robust preset: fine-round frames render a subset (FrameSequence::subset); depth comes with the coarse round's") {
+TEST_CASE("robust preset: fine-round frames render a subset (FrameSequence::subset) and depth comes with them") {
   auto w = two_blobs();
   const auto cams = forward_rig();
   int depth_requests = 0, renders = 0, coarse_renders = 0, fine_depth = 0;
@@ -265,13 +265,11 @@ TEST_CASE("robust preset: fine-round frames render a subset (FrameSequence::subs
   const auto r = vcar::segment(w.scene, cams, prompt, renderer, seg);  // default: VcarParams::robust()
   CHECK(subset_flags == std::vector<bool>{false, true});
   CHECK(same_set(r.indices, w.a));
-  // Every frame rendered once for the segmenter; the coarse round's with depth (Eq. R3, R11,
-  // R12); the lambda answers all frames before voting, so the vote renders them again. The fine
-  // round's renders of G_coarse carry no depth: Eq. R3 is the coarse round's, and Eq. R6 reads
-  // alpha (Eq. R11 would ask for it, but no coarse mask here overshoots).
+  // Every frame rendered once for the segmenter, with depth (the occlusion test of both rounds:
+  // Eq. R3, R3c); the lambda answers all frames before voting, so the vote renders depth again.
   CHECK(coarse_renders >= static_cast<int>(cams.size()));
-  CHECK(depth_requests == coarse_renders);
-  CHECK(fine_depth == 0);
+  CHECK(fine_depth == renders - coarse_renders);
+  CHECK(depth_requests == renders);
   CHECK(renders >= static_cast<int>(cams.size() + cams.size() + 32));
 }
 

@@ -74,6 +74,78 @@ TEST_CASE("Eq. R3 by hand: a Gaussian behind the rendered surface is occluded, w
   CHECK(v.ratio(1) == 1.f);
 }
 
+TEST_CASE("Eq. R3c by hand: in the fine round R3 lowers a ratio, never raises it") {
+  // Gaussian 0 at pixel (10, 10), z = 2, behind a surface at depth 1 in the views with depth;
+  // Gaussian 1 on that surface (z = 1): never occluded.
+  const auto scene = scene_of({{0.1f, 0.1f, 2.0f}, {0.05f, 0.05f, 1.0f}});
+  const Camera c = cam20("a");
+  const Mask full = square(0, 0, 20, 20), empty = square(0, 0, 0, 0);
+  ImageF depth(20, 20, 1), alpha(20, 20, 1);
+  for (std::size_t p = 0; p < depth.data.size(); ++p) { alpha.data[p] = 0.8f; depth.data[p] = 0.8f; }  // D / A = 1
+  vcar::RobustVoteOptions lower;
+  lower.lower_only = true;
+  vcar::RobustVoting plain_r3(scene), r3c(scene, lower);
+  for (vcar::RobustVoting* v : {&plain_r3, &r3c}) {
+    v->add_view(c, &full, &depth, &alpha, 0.05f);   // occluded, foreground
+    v->add_view(c, &empty, &depth, &alpha, 0.05f);  // occluded, background
+    v->add_view(c, &full);                          // no depth: unoccluded, foreground
+    v->add_view(c, &full);
+  }
+  // Gaussian 0: plain 3 of 4 = 0.75; unoccluded 2 of 2, shrunk (kappa 2): (2 + 2 * 0.75) / 4.
+  CHECK(plain_r3.ratio(0) == Approx(0.875f));
+  CHECK(r3c.ratio(0) == Approx(0.75f));  // R3 would raise it: the plain reading stays
+  CHECK(r3c.ratio(0, false) == Approx(0.75f));
+  // Gaussian 1 is never occluded: both readings agree.
+  CHECK(r3c.ratio(1) == plain_r3.ratio(1));
+  // Where R3 lowers, it lowers: background hidden behind the target in the views with depth.
+  vcar::RobustVoting lowers(scene, lower);
+  lowers.add_view(c, &full, &depth, &alpha, 0.05f);   // occluded, foreground
+  lowers.add_view(c, &full, &depth, &alpha, 0.05f);
+  lowers.add_view(c, &empty);                         // unoccluded, background
+  // plain 2 of 3; unoccluded 0 of 1 shrunk: (0 + 2 * 2/3) / 3 = 4/9.
+  CHECK(lowers.ratio(0) == Approx(4.f / 9.f));
+}
+
+TEST_CASE("Eq. R3c against brute force: the lower of the vote with R3 and the vote without it, each with R6") {
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<float> U(-1.f, 1.f);
+  std::vector<Eigen::Vector3f> mus(2000);
+  for (auto& m : mus) m = {0.6f * U(rng), 0.6f * U(rng), 0.6f * U(rng) + 2.5f};
+  const auto scene = scene_of(mus);
+  std::vector<Index> cand;
+  for (Index i = 0; i < 2000; i += 2) cand.push_back(i);
+  vcar::RobustVoteOptions with_r3c{2.f, 1.5f, false, true}, without_r3c{2.f, 1.5f, false, false};
+  vcar::RobustVoting a(scene, cand, with_r3c), b(scene, cand, without_r3c), no_depth(scene, cand, without_r3c);
+  for (int j = 0; j < 10; ++j) {
+    Camera c = Camera::look_at({2.f * std::cos(0.6f * j), 0.4f, 2.5f + 2.f * std::sin(0.6f * j)}, {0, 0, 2.5f},
+                               {0, -1, 0}, {40, 30, 30, 30, 20.f, 15.f}, "c" + std::to_string(j));
+    const int x0 = 8 + static_cast<int>(rng() % 4), y0 = 6 + static_cast<int>(rng() % 4);
+    const int e = static_cast<int>(rng() % 5);  // the mask's undershoot
+    ImageF alpha(40, 30, 1), depth(40, 30, 1);
+    Mask m(40, 30, 1);
+    const float surface = 2.f + 0.5f * (U(rng) + 1.f);  // some candidates lie behind it
+    for (int y = y0; y < y0 + 18; ++y)
+      for (int x = x0; x < x0 + 24; ++x) {
+        const std::size_t q = static_cast<std::size_t>(y) * 40 + x;
+        alpha.data[q] = 1.f;
+        depth.data[q] = surface;
+        if (x >= x0 + e && x < x0 + 24 - e && y >= y0 + e && y < y0 + 18 - e) m.data[q] = rng() % 8 ? 255 : 0;
+      }
+    a.add_view(c, &m, &depth, &alpha, 0.05f);
+    b.add_view(c, &m, &depth, &alpha, 0.05f);
+    no_depth.add_view(c, &m, nullptr, &alpha);  // no R3: the plain level with R6
+  }
+  std::size_t lowered = 0, kept_r3 = 0;
+  for (std::size_t k = 0; k < cand.size(); ++k) {
+    REQUIRE(a.ratio(k) == std::min(b.ratio(k), no_depth.ratio(k)));
+    REQUIRE(a.ratio(k, false) == std::min(b.ratio(k, false), no_depth.ratio(k, false)));
+    lowered += b.ratio(k) > no_depth.ratio(k);
+    kept_r3 += b.ratio(k) < no_depth.ratio(k);
+  }
+  CHECK(lowered > 0);  // R3 would have raised some ratios, and lowered others
+  CHECK(kept_r3 > 0);
+}
+
 TEST_CASE("RobustVoting with every mechanism off equals VisibilityVoting (Eq. 1-3) on random scenes") {
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> U(-1.f, 1.f);
