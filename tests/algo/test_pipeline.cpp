@@ -265,8 +265,8 @@ TEST_CASE("robust preset: fine-round frames render a subset (FrameSequence::subs
   const auto r = vcar::segment(w.scene, cams, prompt, renderer, seg);  // default: VcarParams::robust()
   CHECK(subset_flags == std::vector<bool>{false, true});
   CHECK(same_set(r.indices, w.a));
-  // Every frame rendered once for the segmenter, with depth (the occlusion test of both rounds:
-  // Eq. R3, R3c); the lambda answers all frames before voting, so the vote renders depth again.
+  // Every frame rendered once for the segmenter, with depth (the occlusion test of both rounds);
+  // the lambda answers all frames before voting, so the vote renders depth again.
   CHECK(coarse_renders >= static_cast<int>(cams.size()));
   CHECK(fine_depth == renders - coarse_renders);
   CHECK(depth_requests == renders);

@@ -28,12 +28,4 @@ inline bool decisive_vote(std::size_t n_strict, std::size_t n_majority, float sp
   return static_cast<double>(n_strict) >= (1.0 - static_cast<double>(split)) * static_cast<double>(n_majority);
 }
 
-// Eq. R6c: whether the fine vote without Eq. R6 is the result: it keeps at tau_u at least
-// (1 - split) of what the vote with R6 keeps there (n_plain >= (1 - s) n_with: R6 changes little)
-// and it is decisive by Eq. R7 (n_plain_strict, kept at tau_strict, >= (1 - s) n_plain). A vote
-// that keeps next to nothing without R6 (eroded masks read without their band) is not decisive.
-inline bool plain_vote_decides(std::size_t n_plain, std::size_t n_plain_strict, std::size_t n_with, float split) noexcept {
-  return decisive_vote(n_plain, n_with, split) && decisive_vote(n_plain_strict, n_plain, split);
-}
-
 }  // namespace vcar

@@ -81,9 +81,8 @@ struct VcarParams {
   // Eq. R2-R3, the evidence levels. R3: a Gaussian behind the view's rendered surface,
   // z > (depth / alpha)(p) (1 + depth_tolerance) where alpha(p) >= 0.5, is occluded there
   // (evidence of the lower "plain" level only), in both rounds: the coarse round against renders
-  // of the scene, the fine round against renders of G_coarse, where R3 may lower a candidate's
-  // ratio but never raise it (Eq. R3c: the lower of the plain and the unoccluded reading). R2:
-  // kappa, the prior weight in views that ties each level's ratio to the one below.
+  // of the scene, the fine round against renders of G_coarse. R2: kappa, the prior weight in
+  // views that ties each level's ratio to the one below.
   struct Evidence {
     bool occlusion = false;
     float kappa = 2.f;
@@ -163,9 +162,8 @@ struct VcarParams {
     return p;
   }
   // vcar's default (beyond the paper, docs/robust.md): the paper's thresholds (tau_coarse 0.5,
-  // tau_fine 0.8), the evidence levels (R2) with the occlusion test in both rounds (R3; in the
-  // fine round it only lowers ratios, R3c), the fine round's band as wide as the masks' measured
-  // undershoot (R6) where the vote without it splits
+  // tau_fine 0.8), the evidence levels (R2) with the occlusion test in both rounds (R3), the fine
+  // round's band as wide as the masks' measured undershoot (R6) where the vote without it splits
   // (R6c), the fine threshold 0.7 where the round's masks undershoot (R6d), the strict threshold
   // 0.85 when the fine vote is decisive (R7), ABR on masks widened by their undershoot when it is
   // split, on their own footprints (R8), hidden candidates on a seen background plane dropped

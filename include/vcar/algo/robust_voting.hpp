@@ -55,7 +55,6 @@ struct RobustVoteOptions {
   float kappa = 2.f;            // Eq. R2: prior weight in views
   float gamma = 0.f;            // Eq. R6: outer band reach factor on the undershoot (0 = off)
   bool reliability = false;     // Eq. R13: views weighted by their agreement with the consensus
-  bool lower_only = false;      // Eq. R3c: R3 may lower a candidate's ratio, never raise it
 };
 
 class RobustVoting {
@@ -107,7 +106,6 @@ public:
       }
     }
     const bool sure_counts = sure_level();
-    const bool plain_sure = o_.lower_only && sure_level();
     const detail::MeanProjection P = detail::MeanProjection::from(camera);
     const std::uint8_t* M = mask->data.data();
     const float* D = expected_depth ? expected_depth->data.data() : nullptr;
@@ -127,9 +125,6 @@ public:
           const std::size_t i = i0 + l, p = static_cast<std::size_t>(pix[l]);
           const std::uint16_t f = M[p] != 0;
           ++c_[0][i]; c_[1][i] = static_cast<std::uint16_t>(c_[1][i] + f);                  // Eq. 2
-          if (plain_sure && !(sure && !sure[p])) {                                             // Eq. R3c
-            ++c_[6][i]; c_[7][i] = static_cast<std::uint16_t>(c_[7][i] + f);
-          }
           if (D && A[p] >= 0.5f && !(z[l] <= D[p] / A[p] * scale)) continue;                  // Eq. R3
           ++c_[2][i]; c_[3][i] = static_cast<std::uint16_t>(c_[3][i] + f);
           if (o_.reliability) rel_.see(i, f != 0);                                            // Eq. R13
@@ -183,13 +178,7 @@ public:
       if (weighed) V = rv_[k], F = rf_[k];
       if (V + o_.kappa > 0.f) R = (F + o_.kappa * R) / (V + o_.kappa);                    // Eq. R2
     }
-    if (!o_.lower_only) return R;
-    // Eq. R3c: the plain level read the same way (R6's band, without R3), and the lower of the two.
-    const float R0 = static_cast<float>(foreground(k)) / static_cast<float>(std::max<std::uint16_t>(visible(k), 1));
-    float Rp = R0;
-    if (top == 2 && (c_[6][k] != visible(k) || c_[7][k] != foreground(k)))
-      Rp = (static_cast<float>(c_[7][k]) + o_.kappa * R0) / (static_cast<float>(c_[6][k]) + o_.kappa);  // Eq. R2
-    return std::min(R, Rp);
+    return R;
   }
   // Eq. 3 / R2 for candidate k (undershoot as in ratio()).
   bool kept(std::size_t k, float tau, bool undershoot = true) const { return ratio(k, undershoot) >= tau; }
@@ -212,7 +201,7 @@ private:
 
   void init(const float* x, const float* y, const float* z, std::size_t n) {
     x_ = x; y_ = y; z_ = z; n_ = n;
-    const std::size_t counters = sure_level() ? (o_.lower_only ? 8 : 6) : 4;
+    const std::size_t counters = sure_level() ? 6 : 4;
     for (std::size_t c = 0; c < counters; ++c) c_[c].assign(n, 0);
     if (o_.reliability) rel_ = ViewReliability(n);
   }
@@ -222,8 +211,7 @@ private:
   std::size_t n_ = 0, views_ = 0;
   std::vector<Index> candidates_;
   std::array<std::vector<float>, 3> own_;
-  // V, F, V^o, F^o, V^s, F^s (with R6), and with R3c and R6 the plain level's sure counts
-  std::array<std::vector<std::uint16_t>, 8> c_;
+  std::array<std::vector<std::uint16_t>, 6> c_;  // V, F, V^o, F^o, V^s, F^s (the last two with R6)
   std::vector<std::uint8_t> outer_;      // Eq. R6b: the sure plane with the outer band
   double last_undershoot_ = 0;
   ViewReliability rel_;                  // Eq. R13: V_j, F_j per view

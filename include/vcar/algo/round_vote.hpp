@@ -42,9 +42,7 @@ public:
         overshoot_(p.snap.overshoot_min > 0.f), grow_(!fine && p.snap.grow_max > 0.f), undershoot_(fine && p.undershoot.band > 0.f) {
     if (p.robust_vote()) {
       // Eq. R6 needs frames rendered from the candidates alone: the fine round's.
-      // Eq. R3c: in the fine round (renders of G_coarse) R3 may lower a ratio, never raise it.
-      const RobustVoteOptions o{p.evidence.kappa, undershoot_ ? p.undershoot.band : 0.f, p.reliability.enabled,
-                                fine && p.evidence.occlusion};
+      const RobustVoteOptions o{p.evidence.kappa, undershoot_ ? p.undershoot.band : 0.f, p.reliability.enabled};
       if (candidates) robust_.emplace(scene, *candidates, o);
       else robust_.emplace(scene, o);
     } else if (candidates) {
@@ -96,27 +94,17 @@ public:
     paper_->selected(tau, indices, scores);
   }
   // The same with Eq. R7 choosing between tau and tau_strict (> tau; else tau): the verdict.
-  // With R6's gate, R7 reads the vote without R6 first: when that vote keeps at tau at least
-  // (1 - split) of what the vote with R6 keeps there and is decisive, it is the result;
-  // otherwise the vote with R6 decides as above (Eq. R6c).
+  // With R6's gate, R7 reads the vote without R6 first: when that vote is decisive it is the
+  // result; when it splits, the vote with R6 decides as above (Eq. R6c).
   FineVerdict selected(float tau, float tau_strict, float split, std::vector<Index>& indices,
                        std::vector<float>& scores) const {
-    if (undershoot_ && tau_strict > tau &&
-        plain_vote_decides(kept(tau, false), kept(tau_strict, false), kept(tau, true), split)) {  // Eq. R6c
-      selected(tau_strict, indices, scores, false);
-      return {tau_strict, false, false};
-    }
+    if (undershoot_ && tau_strict > tau && decided(tau, tau_strict, split, indices, scores, false) == tau_strict)
+      return {tau_strict, false, false};                                                     // Eq. R6c
     const float applied = decided(tau, tau_strict, split, indices, scores, true);
     return {applied, tau_strict > tau && applied == tau, undershoot_};
   }
 
 private:
-  // Candidates whose score (with or without Eq. R6) is at least tau.
-  std::size_t kept(float tau, bool undershoot) const {
-    std::size_t n = 0;
-    for (std::size_t k = 0; k < robust_->size(); ++k) n += robust_->kept(k, tau, undershoot);
-    return n;
-  }
   float decided(float tau, float tau_strict, float split, std::vector<Index>& indices, std::vector<float>& scores,
                 bool undershoot) const {
     selected(tau, indices, scores, undershoot);
@@ -172,7 +160,8 @@ inline const Mask* edit_mask(const Mask& m, const RenderOutput& render, bool ove
 
 // One vote of one view. With the occlusion test (or Eq. R11, R12) the view's expected depth (with
 // Eq. R6 alone its alpha) comes from `render` when the round kept it, else it is rendered from
-// the same Gaussians the segmenter saw; the mask is edited by Eq. R11, R12 (edit_mask) and the edits counted.
+// the same Gaussians the segmenter saw; the mask is edited by Eq. R11, R12 (edit_mask) and the
+// edits counted.
 // Returns the mask voted (m, &scratch or null): the one the caller keeps for ABR.
 template <Renderer R>
 const Mask* vote(RoundVote& voting, const Camera& cam, const Mask* m, const RenderOutput* render,
