@@ -238,12 +238,10 @@ TEST_CASE("reference_code's empty-frame filter drops near-empty training frames 
 TEST_CASE("robust preset: fine-round frames render a subset (FrameSequence::subset) and depth comes with them") {
   auto w = two_blobs();
   const auto cams = forward_rig();
-  int depth_requests = 0, renders = 0, coarse_renders = 0, fine_depth = 0;
+  int depth_requests = 0, renders = 0;
   auto renderer = vcar::make_renderer([&](const vcar::RenderRequest& q) {
     ++renders;
     depth_requests += q.want_depth;
-    coarse_renders += q.subset == nullptr;
-    fine_depth += q.subset != nullptr && q.want_depth;
     vcar::RenderOutput out;
     out.rgb = vcar::ImageF(q.camera->width, q.camera->height, 3, 0.f);
     out.alpha = vcar::ImageF(q.camera->width, q.camera->height, 1, 0.f);
@@ -266,11 +264,44 @@ TEST_CASE("robust preset: fine-round frames render a subset (FrameSequence::subs
   CHECK(subset_flags == std::vector<bool>{false, true});
   CHECK(same_set(r.indices, w.a));
   // Every frame rendered once for the segmenter, with depth (the occlusion test of both rounds);
-  // the lambda answers all frames before voting, so the vote renders depth again.
-  CHECK(coarse_renders >= static_cast<int>(cams.size()));
-  CHECK(fine_depth == renders - coarse_renders);
+  // the lambda answers all frames before voting, so the occlusion test renders depth again.
   CHECK(depth_requests == renders);
   CHECK(renders >= static_cast<int>(cams.size() + cams.size() + 32));
+}
+
+TEST_CASE("RenderNeed: a fine round that reads alpha only (Eq. R6 alone) keeps its renders and asks no depth") {
+  auto w = two_blobs();
+  const auto cams = forward_rig();
+  int depth_requests = 0, renders = 0;
+  auto renderer = vcar::make_renderer([&](const vcar::RenderRequest& q) {
+    ++renders;
+    depth_requests += q.want_depth;
+    vcar::RenderOutput out;
+    out.rgb = vcar::ImageF(q.camera->width, q.camera->height, 3, 0.f);
+    out.alpha = vcar::ImageF(q.camera->width, q.camera->height, 1, 0.f);
+    if (q.want_depth) out.depth = vcar::ImageF(q.camera->width, q.camera->height, 1, 0.f);
+    return out;
+  });
+  // Each frame answered as soon as it is drawn: the round's kept render is the one voted.
+  auto seg = vcar::make_streaming_segmenter([&](const vcar::FrameSequence& f, const vcar::Prompt&, const vcar::MaskSink& sink) {
+    for (std::size_t k = 0; k < f.size(); ++k) {
+      (void)f.image(k);
+      const vcar::Mask m = blob_a_mask(f.cameras[k]);
+      sink(k, &m);
+    }
+  });
+  auto p = vcar::VcarParams::robust();  // R6 on; every mechanism that reads depth off
+  p.evidence.occlusion = false;
+  p.coplanar.radius = 0.f;
+  p.snap.overshoot_min = 0.f;
+  p.snap.grow_max = 0.f;
+  vcar::Prompt prompt;
+  prompt.reference_view = 4;
+  const auto r = vcar::segment(w.scene, cams, prompt, renderer, seg, p);
+  CHECK(same_set(r.indices, w.a));
+  CHECK(r.diagnostics.sss_triggered);
+  CHECK(depth_requests == 0);
+  CHECK(renders == static_cast<int>(cams.size() + cams.size() + 32));  // no frame rendered twice
 }
 
 TEST_CASE("FrameSequence::drawn: unset in the coarse round (the whole scene), the rendered subset in the fine round") {
