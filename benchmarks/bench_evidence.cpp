@@ -137,8 +137,7 @@ const std::vector<std::string> kVariants = {"coarse", "sss", "abr", "full", "occ
 // The robust preset with one mechanism changed each (docs/robust.md ablation).
 const std::vector<std::string> kRobustAblation = {"robust-nor3", "robust-nolowpass", "robust-tau08", "robust-tau07",
                                                   "robust-noundershoot", "robust-nostrict",
-                                                  "robust-nocoplanar", "robust-noovershoot",
-                                                  "robust-nogrow"};
+                                                  "robust-nocoplanar", "robust-nosnap"};
 
 std::vector<std::string> all_methods(bool variants = true) {
   std::vector<std::string> m = kPeers;
@@ -177,8 +176,7 @@ VcarParams vcar_params(const std::string& variant, const Experiment& e, const st
     else if (variant == "robust-noundershoot") p.undershoot.band = 0.f;
     else if (variant == "robust-nostrict") p.strict.tau = 0.f;
     else if (variant == "robust-nocoplanar") p.coplanar.radius = 0.f;
-    else if (variant == "robust-noovershoot") p.snap.overshoot_min = 0.f;
-    else if (variant == "robust-nogrow") p.snap.grow_max = 0.f;
+    else if (variant == "robust-nosnap") p.snap.enabled = false;
     else if (variant != "robust") throw Error("unknown variant '" + variant + "'", "--methods");
     if (e.failure == "tau") { p.tau_coarse = static_cast<float>(e.level); p.tau_fine = static_cast<float>(e.level); }
     for (const std::string& kv : set) io::set_parameter(p, kv);

@@ -51,8 +51,8 @@
 // the paper's preset plus the occlusion test and view reliability, docs/notes/
 // field-probes-2026-12-02.md), and the peers (evidence/methods.hpp), which take the coarse
 // round's training masks. An ablation row: vcar:robust@KEY=VALUE[+KEY=VALUE...], the default with
-// those parameters changed (text keys as --set; e.g. vcar:robust@overshoot_min=0 is the default
-// without R11), its CSV variant the text after "vcar:".
+// those parameters changed (text keys as --set; e.g. vcar:robust@snap=false is the default
+// without R11-R12), its CSV variant the text after "vcar:".
 //
 // Cost: the coarse round's training masks (frames rendering the whole scene) are the same for
 // every method of a (seed, target, rig, segmenter): they are computed once, and VCAR's coarse

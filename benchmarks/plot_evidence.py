@@ -25,8 +25,7 @@ RIGS = ["forward", "orbit", "sparse", "hemisphere"]
 PEERS = ["naive", "sagd", "flashsplat", "gaussiancut", "ludvig", "lbg"]
 VARIANTS = ["coarse", "sss", "abr", "full", "occlusion", "gapdir", "robust"]
 ROBUST_ABLATION = ["robust-nor3", "robust-nolowpass", "robust-tau08", "robust-tau07", "robust-noundershoot",
-                   "robust-nostrict", "robust-nocoplanar", "robust-noovershoot",
-                   "robust-nogrow"]
+                   "robust-nostrict", "robust-nocoplanar", "robust-nosnap"]
 TARGETS = ["sphere", "torus", "cylinder", "box"]
 NUM = {"seed", "gaussians", "object_gaussians", "level", "width", "height", "n_train", "n_eval", "miou", "macc",
        "miou_01", "macc_01", "boundary_iou", "boundary_f1", "trimap_iou", "f1_3d", "precision_3d", "recall_3d",
@@ -87,7 +86,8 @@ def label(key):
             "vcar:robust-nocoplanar": "robust - hidden on a background plane (R10)",
             "vcar:robust-nogate": "robust - R6's gate (R6c)",
             "vcar:robust-noovershoot": "robust - R11 overshoot erosion",
-            "vcar:robust-nogrow": "robust - R12 growth to occlusion edges"}.get(key, key)
+            "vcar:robust-nogrow": "robust - R12 growth to occlusion edges",
+            "vcar:robust-nosnap": "robust - snap to occlusion edges (R11-R12)"}.get(key, key)
 
 
 STYLE = {}

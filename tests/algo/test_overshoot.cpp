@@ -1,5 +1,7 @@
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -133,4 +135,79 @@ TEST_CASE("Eq. R11c by hand: erosion keeps the pixels farther than e from the ba
   Mask same = square_mask(20, 20, 3, 3, 17, 17);
   vcar::erode_by_overshoot(same, 0.0);
   CHECK(same.data == square_mask(20, 20, 3, 3, 17, 17).data);
+}
+
+TEST_CASE("Eq. R11c and R12's condition by hand: the snap's direction from the contour's quartiles") {
+  using vcar::SnapDirection;
+  // {q1, o, q3}: a dilated mask (every contour pixel 2 px out) erodes; one a pixel out along a
+  // quarter of its contour and on the edge elsewhere does not move; an eroded one grows.
+  CHECK(vcar::snap_direction({2.0, 2.0, 2.236}) == SnapDirection::erode);
+  CHECK(vcar::snap_direction({0.0, 1.0, 3.0}) == SnapDirection::erode);   // q1 = 0: on or outside
+  CHECK(vcar::snap_direction({0.0, 0.0, 1.0}) == SnapDirection::none);    // o < o_min, q3 = o_min
+  CHECK(vcar::snap_direction({0.0, 0.0, 0.0}) == SnapDirection::grow);    // exact: grows by m_g
+  CHECK(vcar::snap_direction({-2.0, -2.0, -1.414}) == SnapDirection::grow);
+  // Both sides of the edges: o >= o_min but a quarter lies 2 px inside (a shifted mask): none.
+  CHECK(vcar::snap_direction({-2.0, 1.0, 2.828}) == SnapDirection::none);
+  CHECK(vcar::snap_direction({-0.5, 0.5, 2.0}) == SnapDirection::none);
+}
+
+TEST_CASE("Eq. R11b's quartiles against brute force: a dilated disc erodes, an eroded one grows, a shifted one neither") {
+  // A disc of radius 7 at (11, 11), depth 1, before a wall at depth 3, in a 24 x 24 render.
+  const int N = 24;
+  auto disc = [&](int cx, int cy, int r) {
+    Mask m(N, N, 1);
+    for (int y = 0; y < N; ++y)
+      for (int x = 0; x < N; ++x)
+        if ((x - cx) * (x - cx) + (y - cy) * (y - cy) <= r * r) m.data[static_cast<std::size_t>(y) * N + x] = 255;
+    return m;
+  };
+  const Mask object = disc(11, 11, 7);
+  Render r{ImageF(N, N, 1), ImageF(N, N, 1)};
+  for (std::size_t q = 0; q < object.data.size(); ++q) {
+    r.alpha.data[q] = 1.f;
+    r.depth.data[q] = object.data[q] ? 1.f : 3.f;
+  }
+  const std::vector<std::uint8_t> e = vcar::occlusion_edges(r.alpha, r.depth, 0.05f);
+  // s(c) by its definition (Eq. R11b), every pair of pixels compared; quartiles as documented.
+  auto brute = [&](const Mask& m) {
+    std::vector<double> s;
+    auto at = [&](int x, int y) { return m.data[static_cast<std::size_t>(y) * N + x] != 0; };
+    for (int y = 0; y < N; ++y)
+      for (int x = 0; x < N; ++x) {
+        if (!at(x, y)) continue;
+        const bool contour = (x > 0 && !at(x - 1, y)) || (x + 1 < N && !at(x + 1, y)) || (y > 0 && !at(x, y - 1)) ||
+                             (y + 1 < N && !at(x, y + 1));
+        if (!contour) continue;
+        double d_in = INFINITY, d_out = INFINITY;
+        for (int v = 0; v < N; ++v)
+          for (int u = 0; u < N; ++u) {
+            if (!e[static_cast<std::size_t>(v) * N + u]) continue;
+            double& d = at(u, v) ? d_in : d_out;
+            d = std::min(d, std::hypot(u - x, v - y));
+          }
+        s.push_back(d_in <= d_out ? d_in : -d_out);
+      }
+    std::sort(s.begin(), s.end());
+    return std::array<double, 3>{s[s.size() / 4], s[s.size() / 2], s[3 * s.size() / 4]};
+  };
+  struct Case {
+    Mask m;
+    std::array<double, 3> want;  // by brute force, written out
+    vcar::SnapDirection dir;
+  };
+  const std::vector<Case> cases = {
+      {object, {0.0, 0.0, 0.0}, vcar::SnapDirection::grow},                     // exact: by m_g only
+      {disc(11, 11, 9), {2.0, 2.0, std::sqrt(5.0)}, vcar::SnapDirection::erode},  // dilated by 2
+      {disc(11, 11, 5), {-2.0, -2.0, -std::sqrt(2.0)}, vcar::SnapDirection::grow},  // eroded by 2
+      {disc(14, 13, 7), {-2.0, 1.0, std::sqrt(8.0)}, vcar::SnapDirection::none},  // shifted by (3, 2)
+  };
+  for (const Case& c : cases) {
+    const std::array<double, 3> got = vcar::overshoot_quartiles_px(c.m, e), want = brute(c.m);
+    for (int k = 0; k < 3; ++k) {
+      CHECK(got[k] == Approx(want[k]));
+      CHECK(got[k] == Approx(c.want[k]));
+    }
+    CHECK(vcar::overshoot_px(c.m, e) == got[1]);
+    CHECK(vcar::snap_direction(got) == c.dir);
+  }
 }

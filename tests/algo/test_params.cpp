@@ -78,8 +78,7 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
   CHECK(r.undershoot.tau == 0.7f);                    // R6d
   CHECK(r.strict.tau > r.tau_fine);
   CHECK(r.abr_lowpass);  // as the paper; R8 reads own footprints after a split vote
-  CHECK(r.snap.overshoot_min > 0.f);      // R11
-  CHECK(r.snap.grow_max > 0.f);           // R12
+  CHECK(r.snap.enabled);                  // R11-R12
   CHECK(r.evidence.kappa == 2.f);
   CHECK(r.robust_vote());
   CHECK_NOTHROW(r.validate());
@@ -90,8 +89,7 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
     CHECK(p.undershoot.tau == 0.f);
     CHECK(p.strict.tau <= p.tau_fine);  // Eq. R7 off
     CHECK(p.abr_lowpass);
-    CHECK(p.snap.overshoot_min == 0.f);     // Eq. R11 off
-    CHECK(p.snap.grow_max == 0.f);          // Eq. R12 off
+    CHECK_FALSE(p.snap.enabled);            // Eq. R11-R12 off
   }
   CHECK(VcarParams::reference_code().force_fine_round);
   CHECK_FALSE(VcarParams::nvos().force_fine_round);

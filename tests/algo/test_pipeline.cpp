@@ -293,8 +293,7 @@ TEST_CASE("RenderNeed: a fine round that reads alpha only (Eq. R6 alone) keeps i
   auto p = vcar::VcarParams::robust();  // R6 on; every mechanism that reads depth off
   p.evidence.occlusion = false;
   p.coplanar.radius = 0.f;
-  p.snap.overshoot_min = 0.f;
-  p.snap.grow_max = 0.f;
+  p.snap.enabled = false;
   vcar::Prompt prompt;
   prompt.reference_view = 4;
   const auto r = vcar::segment(w.scene, cams, prompt, renderer, seg, p);
@@ -422,7 +421,7 @@ TEST_CASE("Eq. R8: ABR reads the training masks widened by their undershoot only
   erode_coarse = 2;
   p = vcar::VcarParams::robust();
   p.force_fine_round = true;
-  p.snap.grow_max = 0.f;  // R12 would grow the eroded coarse masks back
+  p.snap.enabled = false;  // R12 would grow the eroded coarse masks back
   auto full = [&](int px, const vcar::VcarParams& q) {
     erode = px;
     return vcar::segment(w.scene, cams, prompt, renderer, seg, q);
@@ -493,7 +492,7 @@ TEST_CASE("Eq. R11: masks that overshoot the render's occlusion edges are eroded
   };
   const vcar::VcarParams robust = vcar::VcarParams::robust();
   vcar::VcarParams off = robust;
-  off.snap.overshoot_min = 0.f;
+  off.snap.enabled = false;  // R11 (and R12, which does not act on dilated masks) off
   const vcar::SegmentationResult on_r = run(robust), off_r = run(off);
   // Without R11 the dilated masks keep the shell; with it every mask is eroded (both rounds),
   // the shell goes and blob A stays whole.
@@ -502,7 +501,7 @@ TEST_CASE("Eq. R11: masks that overshoot the render's occlusion edges are eroded
   CHECK(on_r.diagnostics.overshoot_eroded >= cams.size());
   CHECK(!holds_any(on_r.indices, shell));
   CHECK(holds_all(on_r.indices, w.a));
-  // Exact masks: their contour is the render's edge (o_j = 0 < overshoot_min), nothing eroded.
+  // Exact masks: their contour is the render's edge (o_j = 0 < o_min), nothing eroded.
   dilate_px = 0;
   const vcar::SegmentationResult exact = run(robust);
   CHECK(exact.diagnostics.overshoot_eroded == 0);
@@ -541,7 +540,7 @@ TEST_CASE("Eq. R12: coarse-round masks that stop short of the render's occlusion
   };
   const vcar::VcarParams robust = vcar::VcarParams::robust();
   vcar::VcarParams off = robust;
-  off.snap.grow_max = 0.f;
+  off.snap.enabled = false;  // R12 (and R11, which does not act on eroded masks) off
   const vcar::SegmentationResult on_r = run(robust), off_r = run(off);
   CHECK(off_r.diagnostics.masks_grown == 0);
   CHECK(on_r.diagnostics.masks_grown == cams.size());  // every training mask, in the coarse round

@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -33,4 +34,17 @@ TEST_CASE("contour median: the upper median of the values that are not NaN, 0 wi
   CHECK(vcar::contour_median(m, [&](std::size_t q) { return q >= 19 ? nan : static_cast<double>(q); }) == 9.0);
   CHECK(vcar::contour_median(m, [&](std::size_t) { return nan; }) == 0.0);
   CHECK(vcar::contour_median(vcar::Mask(3, 3, 1), [](std::size_t) { return 1.0; }) == 0.0);
+}
+
+TEST_CASE("contour quartiles: the values at n / 4, n / 2 and 3n / 4 of the sorted values that are not NaN") {
+  vcar::Mask m(6, 5, 1);
+  for (int y = 1; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) m(x, y) = 255;
+  // The 9 contour pixels {6, 7, 8, 9, 15, 18, 19, 20, 21} (the case above), values 21 - q:
+  // sorted {0, 1, 2, 3, 6, 12, 13, 14, 15}: indices 2, 4 and 6.
+  const auto q = vcar::contour_quartiles(m, [](std::size_t i) { return 21.0 - static_cast<double>(i); });
+  CHECK(q == std::array<double, 3>{2.0, 6.0, 13.0});
+  CHECK(vcar::contour_median(m, [](std::size_t i) { return 21.0 - static_cast<double>(i); }) == 6.0);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  CHECK(vcar::contour_quartiles(m, [&](std::size_t) { return nan; }) == std::array<double, 3>{0.0, 0.0, 0.0});
 }

@@ -33,6 +33,17 @@ TEST_CASE("set_parameter(key, value) parses every kind of field and rejects unkn
     CHECK(msg.find("tau_coarse") != std::string::npos);  // lists the valid keys
     CHECK(msg.find("f_min") != std::string::npos);
   }
+  // The four fields that became one switch (Eq. R11-R12) name it.
+  vcar::io::set_parameter(p, "snap", "false");
+  CHECK_FALSE(p.snap.enabled);
+  for (const char* merged : {"overshoot_min", "grow_max", "overshoot_margin", "grow_margin"}) {
+    try {
+      vcar::io::set_parameter(p, merged, "0");
+      FAIL("expected an error");
+    } catch (const vcar::Error& e) {
+      CHECK(std::string(e.what()).find("'snap'") != std::string::npos);
+    }
+  }
   // Every field is reachable by its own name, and names are unique.
   std::set<std::string> names;
   std::size_t count = 0;

@@ -219,7 +219,10 @@ TEST_CASE("the browser session selects the clicked ball, with orbit views and wi
     REQUIRE(h.objects.size() == 2);
     std::size_t red_in_red = 0;
     for (auto i : h.objects[0].indices) red_in_red += i < static_cast<vcar::Index>(n);
-    CHECK(red_in_red > static_cast<std::size_t>(n) / 2);  // box masks: most of the red ball,
+    // Box masks: a good part of the red ball (161 of 300 when R11-R12 followed the median alone,
+    // 148 since they ask three quarters of the contour to agree: a box's corners lie outside the
+    // ball's silhouette and its sides cut into it, and the snap now leaves such masks as they are),
+    CHECK(red_in_red * 10 > static_cast<std::size_t>(n) * 4);
     CHECK(red_in_red * 10 >= h.objects[0].indices.size() * 9);  // little else
     CHECK_THROWS_WITH(s.segment_objects(view, {}, opt), Catch::Contains("prompt"));
   }

@@ -18,8 +18,8 @@
 // through it reaches the edge within the reach r_j:
 //   M'_j = M_j  union  {p : a_j(p) + b_j(p) <= r_j}                                   (Eq. R12b)
 //   r_j  = min(-o_j + m_g, g |diag|, sqrt(|M_j| / pi))     where o_j < o_min (Eq. R11b) (Eq. R12c)
-// (m_g = grow_margin, 1 px; g = grow_max, a fraction of the image diagonal; o_min =
-// overshoot_min: a mask that R11 erodes does not grow). Where the object touches the table the
+// (m_g = 1 px, grow_margin_px; g = 0.1 of the image diagonal, grow_max_diagonal; o_min = 1 px,
+// overshoot_min_px: a mask that R11 erodes does not grow). Where the object touches the table the
 // surface is continuous but no occlusion edge lies beyond the contact, so b_j stays above the
 // reach there and the table is not taken; the far side of a depth step is never reached. The
 // last term keeps a mask of a part (a handle prompted inside a mug's silhouette) from growing
@@ -34,6 +34,12 @@
 #include "vcar/core/image.hpp"
 
 namespace vcar {
+
+// Eq. R12c's constants (fields grow_margin and grow_max until 2026-12-03; R11 and R12 now share
+// one switch, VcarParams::snap): the margin in pixels of the view (the contour's grid, as R11's),
+// the cap as a fraction of the image diagonal.
+inline constexpr double grow_margin_px = 1.0;     // m_g
+inline constexpr double grow_max_diagonal = 0.1;  // g
 
 // Eq. R12c: the reach r_j (px, rounded up to whole steps; 0: no growth) of a mask with `foreground` pixels
 // whose contour lies o_j px outside the occlusion edges (Eq. R11b), in an image of the given size.

@@ -30,12 +30,13 @@
 // reads 0. A mask dilated by d reads about d minus the extent. So a contour at least o_min px
 // outside the render's edge overshoots, and the mask is eroded:
 //   M'_j = {p in M_j : d(p, not M_j) > o_j + m}   where o_j >= o_min               (Eq. R11c)
-// (o_min = overshoot_min, 1 px; m = overshoot_margin, 1.5 px: part of the splats' extent that
-// the dilated contour also holds). Measured o_j per view (forward, orbit, sparse and
-// hemisphere rigs, 3 seeds, 160 x 120, the coarse round's renders of the scene): clean masks
+// (o_min = 1 px, m = 1.5 px: part of the splats' extent that the dilated contour also holds;
+// overshoot_min_px and overshoot_margin_px below). Measured o_j per view (forward, orbit, sparse
+// and hemisphere rigs, 3 seeds, 160 x 120, the coarse round's renders of the scene): clean masks
 // median -1 to -5.4, dilated by 2 px 0 to 1, by 4 px 1.4 to 2.8. Per view: three exact distance
 // transforms, two over the image to measure, one over the mask's bounding box to erode.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -47,6 +48,13 @@
 #include "vcar/core/mask_contour.hpp"
 
 namespace vcar {
+
+// Eq. R11c's constants, in pixels of the view: the contour is measured on the pixel grid (a
+// distance between pixel centres, to within a pixel), so these are the grid's units, not the
+// object's. They were fields (overshoot_min, overshoot_margin) until 2026-12-03; R11 and R12
+// now share one switch, VcarParams::snap (docs/robust.md).
+inline constexpr double overshoot_min_px = 1.0;     // o_min: a contour this far past the edges overshoots
+inline constexpr double overshoot_margin_px = 1.5;  // m: eroded by o_j + m
 
 namespace detail {  // vcar::detail
 // The pixel rectangle [x0, x1) x [y0, y1) of an image.
@@ -101,9 +109,10 @@ inline std::vector<std::uint8_t> occlusion_edges(const ImageF& alpha, const Imag
   return e;
 }
 
-// Eq. R11b: the overshoot o_j of mask m (px; > 0: its contour lies outside the render's
-// occlusion edges `edge`, Eq. R11a). 0 when no contour pixel has one (no contour, no edge).
-inline double overshoot_px(const Mask& m, const std::vector<std::uint8_t>& edge) {
+// Eq. R11b: the quartiles {q1_j, o_j, q3_j} of s(c) over mask m's contour (px; > 0: outside the
+// render's occlusion edges `edge`, Eq. R11a), o_j the overshoot. {0, 0, 0} when no contour pixel
+// has a value (no contour, no edge).
+inline std::array<double, 3> overshoot_quartiles_px(const Mask& m, const std::vector<std::uint8_t>& edge) {
   const int W = m.width, H = m.height;
   std::vector<std::uint8_t> in(edge.size()), out(edge.size());
   for (std::size_t q = 0; q < edge.size(); ++q) {
@@ -111,15 +120,32 @@ inline double overshoot_px(const Mask& m, const std::vector<std::uint8_t>& edge)
     out[q] = edge[q] && !m.data[q];
   }
   const std::vector<double> d_in = squared_distance_to(in, W, H), d_out = squared_distance_to(out, W, H);
-  return contour_median(m, [&](std::size_t q) {  // s(c); no edge pixel at all: no value
+  return contour_quartiles(m, [&](std::size_t q) {  // s(c); no edge pixel at all: no value
     const double d2 = std::min(d_in[q], d_out[q]);
     if (!std::isfinite(d2)) return std::numeric_limits<double>::quiet_NaN();
     return d_in[q] <= d_out[q] ? std::sqrt(d_in[q]) : -std::sqrt(d_out[q]);
   });
 }
+// Eq. R11b: the overshoot o_j alone.
+inline double overshoot_px(const Mask& m, const std::vector<std::uint8_t>& edge) {
+  return overshoot_quartiles_px(m, edge)[1];
+}
 // The same from the render (alpha, expected depth) and the depth step delta.
 inline double overshoot_px(const Mask& m, const ImageF& alpha, const ImageF& depth, float delta) {
   return overshoot_px(m, occlusion_edges(alpha, depth, delta));
+}
+
+// Eq. R11c and R12's condition: which way the snap moves a mask whose contour reads the
+// quartiles q = {q1_j, o_j, q3_j} (Eq. R11b). Inwards (erode) when it overshoots, o_j >= o_min,
+// and three quarters of the contour lie on or outside the edges, q1_j >= 0; outwards (grow) when
+// three quarters lie less than o_min outside them, q3_j < o_min; otherwise not at all: a contour
+// on both sides of the edges (a mask shifted off the object, the SAM-like drift) is no
+// overshoot to erode and no gap to fill.
+enum class SnapDirection { none, erode, grow };
+inline SnapDirection snap_direction(const std::array<double, 3>& q) {
+  if (q[1] >= overshoot_min_px && q[0] >= 0.0) return SnapDirection::erode;  // Eq. R11c
+  if (q[2] < overshoot_min_px) return SnapDirection::grow;                    // Eq. R12c
+  return SnapDirection::none;
 }
 
 // Eq. R11c: erodes m (in place) by e px: a foreground pixel stays only when its distance to the

@@ -113,19 +113,17 @@ struct VcarParams {
   struct Coplanar {
     float radius = 0.f;
   } coplanar;
-  // Eq. R11-R12, the snap of each mask to the occlusion edges of the view's render (depth steps
-  // over depth_tolerance; the render is asked for depth). R11: a mask whose contour lies
-  // o_j >= overshoot_min px outside those edges (median over the contour, Eq. R11b) is eroded
-  // by o_j + overshoot_margin px before it is voted and kept for ABR: in the coarse round, and in
-  // the fine round once the coarse round eroded a mask; overshoot_min 0 = off. R12: a
-  // coarse-round mask that R11 does not erode (o_j < overshoot_min) grows by the covered,
-  // depth-continuous pixels between its contour and the edges, by at most min(-o_j + grow_margin
-  // px, grow_max |image diagonal|, r_M), r_M = sqrt(|M| / pi) the mask's radius; grow_max 0 = off.
+  // Eq. R11-R12, the signed snap of each mask to the occlusion edges of the view's render (depth
+  // steps over depth_tolerance; the render is asked for depth), one estimate and one switch: o_j,
+  // the contour's median signed distance outside those edges (Eq. R11b). R11: o_j >= 1 px, the
+  // mask is eroded by o_j + 1.5 px before it is voted and kept for ABR: in the coarse round, and
+  // in the fine round once the coarse round eroded a mask. R12: o_j < 1 px (coarse round), the
+  // mask grows by the covered, depth-continuous pixels between its contour and the edges, by at
+  // most min(-o_j + 1 px, 0.1 |image diagonal|, r_M), r_M = sqrt(|M| / pi) the mask's radius.
+  // (The constants: overshoot.hpp, occlusion_growth.hpp. Until 2026-12-03 four fields,
+  // overshoot_min, overshoot_margin, grow_max and grow_margin.)
   struct Snap {
-    float overshoot_min = 0.f;
-    float overshoot_margin = 1.5f;
-    float grow_max = 0.f;
-    float grow_margin = 1.f;
+    bool enabled = false;
   } snap;
   // Eq. R13: after each round's vote, every view is weighted by how its mask agrees with the
   // round's consensus (Jaccard on the candidates it sees, unoccluded by R3 where that is on), and
@@ -167,9 +165,9 @@ struct VcarParams {
   // (R6c), the fine threshold 0.7 where the round's masks undershoot (R6d), the strict threshold
   // 0.85 when the fine vote is decisive (R7), ABR on masks widened by their undershoot when it is
   // split, on their own footprints (R8), hidden candidates on a seen background plane dropped
-  // (R10), masks that reach 1 px or more past the render's occlusion edges eroded (R11), masks
-  // that stop short of them grown to them (R12), and each view weighted by how its mask agrees
-  // with the round's consensus (R13). What vcar::segment uses when given no parameters. Chosen on
+  // (R10), each mask snapped to the render's occlusion edges: eroded where it reaches 1 px or
+  // more past them (R11), grown to them where it stops short (R12), and each view weighted by
+  // how its mask agrees with the round's consensus (R13). What vcar::segment uses when given no parameters. Chosen on
   // the field's tuning seed and the synthetic suite (docs/notes/default-2026-12-02.md; R6d on
   // ISNet's guitar, docs/notes/default-2026-12-03.md): 0.7 where masks undershoot (0.5 let
   // GrabCut's leaks through, 0.8 lost eroded masks' rims), the paper's 0.8 where they do not
@@ -182,8 +180,7 @@ struct VcarParams {
     p.undershoot.tau = 0.7f;
     p.strict.tau = 0.85f;
     p.coplanar.radius = 0.75f;
-    p.snap.overshoot_min = 1.f;
-    p.snap.grow_max = 0.1f;
+    p.snap.enabled = true;
     p.reliability.enabled = true;
     return p;
   }
@@ -232,9 +229,7 @@ struct VcarParams {
     f("occlusion", p.evidence.occlusion); f("kappa", p.evidence.kappa);
     f("undershoot_band", p.undershoot.band); f("undershoot_tau", p.undershoot.tau);
     f("tau_strict", p.strict.tau); f("abr_lowpass", p.abr_lowpass);
-    f("coplanar_radius", p.coplanar.radius); f("overshoot_min", p.snap.overshoot_min);
-    f("overshoot_margin", p.snap.overshoot_margin);
-    f("grow_max", p.snap.grow_max); f("grow_margin", p.snap.grow_margin);
+    f("coplanar_radius", p.coplanar.radius); f("snap", p.snap.enabled);
     f("view_reliability", p.reliability.enabled);
   }
 
@@ -280,13 +275,6 @@ struct VcarParams {
       bad("coplanar_radius", "must be in [0, 10] (0 = off), got " + std::to_string(coplanar.radius));
     if (coplanar.radius > 0.f && !evidence.occlusion)
       bad("coplanar_radius", "Eq. R10 reads the coarse round's occlusion test: set occlusion=true or coplanar_radius=0");
-    if (!(snap.overshoot_min >= 0.f && snap.overshoot_min <= 100.f))
-      bad("overshoot_min", "must be in [0, 100] px (0 = off), got " + std::to_string(snap.overshoot_min));
-    if (!(snap.overshoot_margin >= 0.f && snap.overshoot_margin <= 100.f))
-      bad("overshoot_margin", "must be in [0, 100] px, got " + std::to_string(snap.overshoot_margin));
-    unit("grow_max", snap.grow_max);
-    if (!(snap.grow_margin >= 0.f && snap.grow_margin <= 100.f))
-      bad("grow_margin", "must be in [0, 100] px, got " + std::to_string(snap.grow_margin));
   }
 
 };

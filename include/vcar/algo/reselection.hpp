@@ -95,7 +95,7 @@ public:
       edits_[view] = detail::MaskEdit::none;
       if (mask) {
         Mask scratch;  // the coarse round's edits: Eq. R11 and R12
-        mask = detail::edit_mask(*mask, renders_[view], params_.snap.overshoot_min > 0.f, params_.snap.grow_max > 0.f, params_,
+        mask = detail::edit_mask(*mask, renders_[view], params_.snap.enabled, params_.snap.enabled, params_,
                                  scratch, edits_[view]);
         masks_[view] = std::make_shared<const RleMask>(RleMask::encode(*mask));
       } else {
@@ -184,7 +184,7 @@ private:
   // them for all but Eq. R2 and R13; they are cheap next to a segmenter, so any robust vote
   // takes the renderer path).
   bool reads_renders() const {
-    return params_.robust_vote() || params_.snap.overshoot_min > 0.f || params_.snap.grow_max > 0.f || params_.coplanar.radius > 0.f;
+    return params_.robust_vote() || params_.snap.enabled || params_.coplanar.radius > 0.f;
   }
   bool robust() const { return !renders_.empty(); }
 

@@ -2,6 +2,7 @@
 // The vote of one round (Eq. 1-3, or the robust vote of docs/robust.md) and the vote of one
 // view with its mask edits (Eq. R11, R12).
 #include <algorithm>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -39,7 +40,7 @@ class RoundVote {
 public:
   RoundVote(const GaussianScene& scene, const std::vector<Index>* candidates, const VcarParams& p, bool fine)
       : occlusion_(p.occlusion_aware || p.evidence.occlusion),
-        overshoot_(p.snap.overshoot_min > 0.f), grow_(!fine && p.snap.grow_max > 0.f), undershoot_(fine && p.undershoot.band > 0.f) {
+        overshoot_(p.snap.enabled), grow_(!fine && p.snap.enabled), undershoot_(fine && p.undershoot.band > 0.f) {
     if (p.robust_vote()) {
       // Eq. R6 needs frames rendered from the candidates alone: the fine round's.
       const RobustVoteOptions o{p.evidence.kappa, undershoot_ ? p.undershoot.band : 0.f, p.reliability.enabled};
@@ -139,16 +140,18 @@ inline const Mask* edit_mask(const Mask& m, const RenderOutput& render, bool ove
     return static_cast<std::size_t>(std::count_if(x.data.begin(), x.data.end(), [](std::uint8_t v) { return v != 0; }));
   };
   const std::vector<std::uint8_t> edges = occlusion_edges(render.alpha, render.depth, params.depth_tolerance);  // Eq. R11a
-  const double o = overshoot_px(m, edges);  // Eq. R11b
-  if (overshoot && o >= static_cast<double>(params.snap.overshoot_min)) {
+  const std::array<double, 3> q = overshoot_quartiles_px(m, edges);  // Eq. R11b
+  const double o = q[1];
+  const SnapDirection dir = snap_direction(q);
+  if (overshoot && dir == SnapDirection::erode) {
     scratch = m;
-    erode_by_overshoot(scratch, o + static_cast<double>(params.snap.overshoot_margin));  // Eq. R11c
+    erode_by_overshoot(scratch, o + overshoot_margin_px);  // Eq. R11c
     if (4 * foreground(scratch) < foreground(m)) return &m;  // thin or scattered masks are kept as they are
     edit = MaskEdit::eroded;
     return &scratch;
   }
-  if (grow && o < static_cast<double>(params.snap.overshoot_min)) {
-    const int reach_px = growth_reach(o, foreground(m), m.width, m.height, params.snap.grow_max, params.snap.grow_margin);  // Eq. R12c
+  if (grow && dir == SnapDirection::grow) {
+    const int reach_px = growth_reach(o, foreground(m), m.width, m.height, grow_max_diagonal, grow_margin_px);  // Eq. R12c
     scratch = m;
     if (grow_to_occlusion_edges(scratch, edges, render.alpha, render.depth, params.depth_tolerance, reach_px) > 0) {
       edit = MaskEdit::grown;  // Eq. R12b

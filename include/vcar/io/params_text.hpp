@@ -116,7 +116,13 @@ inline void set_parameter(VcarParams& p, std::string_view key, std::string_view 
     found = true;
     detail::parse_value(std::string(name), std::string(value), field);
   });
-  if (!found) throw Error("unknown parameter '" + std::string(key) + "'; valid keys: " + parameter_keys(), "--set");
+  if (!found) {
+    for (const char* merged : {"overshoot_min", "overshoot_margin", "grow_max", "grow_margin"})  // until 2026-12-03
+      if (key == merged)
+        throw Error("'" + std::string(key) + "' is now part of 'snap' (true/false: Eq. R11-R12 together, "
+                    "docs/robust.md)", "--set");
+    throw Error("unknown parameter '" + std::string(key) + "'; valid keys: " + parameter_keys(), "--set");
+  }
 }
 // "key=value" form of set_parameter.
 inline void set_parameter(VcarParams& p, std::string_view assignment) {
