@@ -29,7 +29,9 @@
 // reads about e less; a segmenter that follows the render's own edges (the frames are renders)
 // reads 0. A mask dilated by d reads about d minus the extent. So a contour at least o_min px
 // outside the render's edge overshoots, and the mask is eroded:
-//   M'_j = {p in M_j : d(p, not M_j) > o_j + m}   where o_j >= o_min               (Eq. R11c)
+//   M'_j = {p in M_j : d(p, not M_j) > o_j + m}   where o_j >= o_min, q1_j >= 0    (Eq. R11c)
+// (q1_j, q3_j the lower and upper quartiles of s(c): erosion asks three quarters of the contour
+// on or outside the edges, R12's growth three quarters less than o_min outside; snap_direction)
 // (o_min = 1 px, m = 1.5 px: part of the splats' extent that the dilated contour also holds;
 // overshoot_min_px and overshoot_margin_px below). Measured o_j per view (forward, orbit, sparse
 // and hemisphere rigs, 3 seeds, 160 x 120, the coarse round's renders of the scene): clean masks

@@ -115,11 +115,13 @@ struct VcarParams {
   } coplanar;
   // Eq. R11-R12, the signed snap of each mask to the occlusion edges of the view's render (depth
   // steps over depth_tolerance; the render is asked for depth), one estimate and one switch: o_j,
-  // the contour's median signed distance outside those edges (Eq. R11b). R11: o_j >= 1 px, the
-  // mask is eroded by o_j + 1.5 px before it is voted and kept for ABR: in the coarse round, and
-  // in the fine round once the coarse round eroded a mask. R12: o_j < 1 px (coarse round), the
-  // mask grows by the covered, depth-continuous pixels between its contour and the edges, by at
-  // most min(-o_j + 1 px, 0.1 |image diagonal|, r_M), r_M = sqrt(|M| / pi) the mask's radius.
+  // the contour's median signed distance outside those edges, and its quartiles q1_j, q3_j
+  // (Eq. R11b). R11: o_j >= 1 px and q1_j >= 0, the mask is eroded by o_j + 1.5 px before it is
+  // voted and kept for ABR: in the coarse round, and in the fine round once the coarse round
+  // eroded a mask. R12: q3_j < 1 px (coarse round), the mask grows by the covered,
+  // depth-continuous pixels between its contour and the edges, by at most min(-o_j + 1 px,
+  // 0.1 |image diagonal|, r_M), r_M = sqrt(|M| / pi) the mask's radius. A contour on both sides
+  // of the edges (a mask shifted off the object) is left as it is.
   // (The constants: overshoot.hpp, occlusion_growth.hpp. Until 2026-12-03 four fields,
   // overshoot_min, overshoot_margin, grow_max and grow_margin.)
   struct Snap {
@@ -165,12 +167,13 @@ struct VcarParams {
   // (R6c), the fine threshold 0.7 where the round's masks undershoot (R6d), the strict threshold
   // 0.85 when the fine vote is decisive (R7), ABR on masks widened by their undershoot when it is
   // split, on their own footprints (R8), hidden candidates on a seen background plane dropped
-  // (R10), each mask snapped to the render's occlusion edges: eroded where it reaches 1 px or
-  // more past them (R11), grown to them where it stops short (R12), and each view weighted by
-  // how its mask agrees with the round's consensus (R13). What vcar::segment uses when given no parameters. Chosen on
-  // the field's tuning seed and the synthetic suite (docs/notes/default-2026-12-02.md; R6d on
-  // ISNet's guitar, docs/notes/default-2026-12-03.md): 0.7 where masks undershoot (0.5 let
-  // GrabCut's leaks through, 0.8 lost eroded masks' rims), the paper's 0.8 where they do not
+  // (R10), each mask snapped to the render's occlusion edges where three quarters of its contour
+  // agree: eroded where it reaches 1 px or more past them (R11), grown to them where it stops
+  // short (R12), and each view weighted by how its mask agrees with the round's consensus (R13).
+  // What vcar::segment uses when given no parameters. Chosen on the field's tuning seed and the
+  // synthetic suite (docs/notes/default-2026-12-02.md; R6d on ISNet's guitar, the snap's
+  // conditions on SAM-like drift, docs/notes/default-2026-12-03.md): 0.7 where masks undershoot
+  // (0.5 let GrabCut's leaks through, 0.8 lost eroded masks' rims), the paper's 0.8 where they do not
   // (ISNet's floor patches), R13 on (SAM-like drift). (R1, R4, R5 and R9 were removed: inert in
   // every preset, or never better on the field; docs/robust.md, appendix.)
   static VcarParams robust() {
