@@ -209,5 +209,9 @@ TEST_CASE("Eq. R11b's quartiles against brute force: a dilated disc erodes, an e
     }
     CHECK(vcar::overshoot_px(c.m, e) == got[1]);
     CHECK(vcar::snap_direction(got) == c.dir);
+    // The transforms over a window around the mask read the whole image's wherever an edge
+    // outside the window could be nearer: the same quartiles for any window.
+    for (int window : {0, 1, 2, 3, 5})
+      for (int k = 0; k < 3; ++k) CHECK(vcar::overshoot_quartiles_px(c.m, e, window)[k] == got[k]);
   }
 }

@@ -36,7 +36,8 @@
 // overshoot_min_px and overshoot_margin_px below). Measured o_j per view (forward, orbit, sparse
 // and hemisphere rigs, 3 seeds, 160 x 120, the coarse round's renders of the scene): clean masks
 // median -1 to -5.4, dilated by 2 px 0 to 1, by 4 px 1.4 to 2.8. Per view: three exact distance
-// transforms, two over the image to measure, one over the mask's bounding box to erode.
+// transforms, two to measure (over the mask's bounding box grown by 48 px, the whole image's only
+// where a contour pixel's nearest edge lies beyond it), one over the mask's bounding box to erode.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -113,19 +114,58 @@ inline std::vector<std::uint8_t> occlusion_edges(const ImageF& alpha, const Imag
 
 // Eq. R11b: the quartiles {q1_j, o_j, q3_j} of s(c) over mask m's contour (px; > 0: outside the
 // render's occlusion edges `edge`, Eq. R11a), o_j the overshoot. {0, 0, 0} when no contour pixel
-// has a value (no contour, no edge).
-inline std::array<double, 3> overshoot_quartiles_px(const Mask& m, const std::vector<std::uint8_t>& edge) {
+// has a value (no contour, no edge). The two distance transforms run over the mask's bounding box
+// grown by `window` px; a contour pixel whose nearer side is not certain from the box (an edge
+// outside it could be nearer) reads both transforms of the whole image instead, so the result is
+// the whole image's for any window.
+inline constexpr int overshoot_window_px = 48;
+inline std::array<double, 3> overshoot_quartiles_px(const Mask& m, const std::vector<std::uint8_t>& edge,
+                                                    int window = overshoot_window_px) {
   const int W = m.width, H = m.height;
-  std::vector<std::uint8_t> in(edge.size()), out(edge.size());
-  for (std::size_t q = 0; q < edge.size(); ++q) {
-    in[q] = edge[q] && m.data[q];
-    out[q] = edge[q] && !m.data[q];
-  }
-  const std::vector<double> d_in = squared_distance_to(in, W, H), d_out = squared_distance_to(out, W, H);
+  const detail::PixelBox b = detail::foreground_box(m, std::max(window, 0));
+  if (b.width() <= 0) return {0.0, 0.0, 0.0};  // no foreground, no contour
+  auto seeds = [&](bool inside) {
+    return [&, inside](int x, int y) {
+      const std::size_t q = static_cast<std::size_t>(y) * W + x;
+      return edge[q] && (m.data[q] != 0) == inside;
+    };
+  };
+  const std::vector<double> box_in = detail::squared_distance_in(b, seeds(true));
+  const std::vector<double> box_out = detail::squared_distance_in(b, seeds(false));
+  std::vector<double> all_in, all_out;  // the whole image's, only when a pixel needs them
+  auto whole = [&](bool inside) -> const std::vector<double>& {
+    std::vector<double>& d = inside ? all_in : all_out;
+    if (d.empty()) {
+      std::vector<std::uint8_t> s(edge.size());
+      for (std::size_t q = 0; q < edge.size(); ++q) s[q] = edge[q] && (m.data[q] != 0) == inside;
+      d = squared_distance_to(s, W, H);
+    }
+    return d;
+  };
   return contour_quartiles(m, [&](std::size_t q) {  // s(c); no edge pixel at all: no value
-    const double d2 = std::min(d_in[q], d_out[q]);
+    const int x = static_cast<int>(q % static_cast<std::size_t>(W)), y = static_cast<int>(q / static_cast<std::size_t>(W));
+    // Every pixel outside the box lies at least `reach` from (x, y).
+    double reach = no_seed;
+    if (b.x0 > 0) reach = std::min(reach, double(x - b.x0 + 1));
+    if (b.x1 < W) reach = std::min(reach, double(b.x1 - x));
+    if (b.y0 > 0) reach = std::min(reach, double(y - b.y0 + 1));
+    if (b.y1 < H) reach = std::min(reach, double(b.y1 - y));
+    // A box distance within `reach` is the whole image's; one beyond it is an upper bound and
+    // the whole image's is at least reach. The nearer side decides s(c): certain when its
+    // distance is exact and below the other's bound.
+    const std::size_t k = static_cast<std::size_t>(y - b.y0) * b.width() + (x - b.x0);
+    const double r2 = reach * reach;
+    double d_in = box_in[k], d_out = box_out[k];
+    const bool in_exact = d_in <= r2, out_exact = d_out <= r2;
+    if (in_exact && !out_exact && d_in < r2) return std::sqrt(d_in);
+    if (out_exact && !in_exact && d_out < r2) return -std::sqrt(d_out);
+    if (!in_exact || !out_exact) {
+      d_in = whole(true)[q];
+      d_out = whole(false)[q];
+    }
+    const double d2 = std::min(d_in, d_out);
     if (!std::isfinite(d2)) return std::numeric_limits<double>::quiet_NaN();
-    return d_in[q] <= d_out[q] ? std::sqrt(d_in[q]) : -std::sqrt(d_out[q]);
+    return d_in <= d_out ? std::sqrt(d_in) : -std::sqrt(d_out);
   });
 }
 // Eq. R11b: the overshoot o_j alone.
