@@ -32,6 +32,13 @@ TEST_CASE("Eq. R6a by hand: a mask 3 px inside the render undershoots by 3, the 
   CHECK(vcar::undershoot_px(square_mask(20, 20, 8, 8, 12, 12), square_alpha(20, 0, 20)) == 0.0);
   // The image border is not a contour: a full mask has none.
   CHECK(vcar::undershoot_px(square_mask(20, 20, 0, 0, 20, 20), alpha) == 0.0);
+  // Over a window around the mask too small to hold the render's background (0-3 px: the
+  // background lies 4 px out), the whole image's transform decides: the same values.
+  for (int window : {0, 1, 2, 3, 4}) {
+    CHECK(vcar::undershoot_px(square_mask(20, 20, 8, 8, 12, 12), alpha, window) == 3.0);
+    CHECK(vcar::undershoot_px(square_mask(20, 20, 5, 5, 15, 15), alpha, window) == 0.0);
+    CHECK(vcar::undershoot_px(square_mask(20, 20, 8, 8, 12, 12), square_alpha(20, 0, 20), window) == 0.0);
+  }
 }
 
 TEST_CASE("Eq. R6a is a median: a foreground blob of G_coarse that the mask leaves out does not move it") {

@@ -49,6 +49,7 @@
 #include "vcar/core/distance_transform.hpp"
 #include "vcar/core/image.hpp"
 #include "vcar/core/mask_contour.hpp"
+#include "vcar/core/pixel_box.hpp"
 
 namespace vcar {
 
@@ -58,37 +59,6 @@ namespace vcar {
 // now share one switch, VcarParams::snap (docs/robust.md).
 inline constexpr double overshoot_min_px = 1.0;     // o_min: a contour this far past the edges overshoots
 inline constexpr double overshoot_margin_px = 1.5;  // m: eroded by o_j + m
-
-namespace detail {  // vcar::detail
-// The pixel rectangle [x0, x1) x [y0, y1) of an image.
-struct PixelBox {
-  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
-  int width() const { return x1 - x0; }
-  int height() const { return y1 - y0; }
-};
-// The bounding box of m's foreground grown by `grow` px on every side and clipped to the image;
-// empty (x0 == x1) without foreground.
-inline PixelBox foreground_box(const Mask& m, int grow) {
-  PixelBox b{m.width, m.height, 0, 0};
-  for (int y = 0; y < m.height; ++y)
-    for (int x = 0; x < m.width; ++x)
-      if (m.data[static_cast<std::size_t>(y) * m.width + x]) {
-        b.x0 = std::min(b.x0, x), b.y0 = std::min(b.y0, y);
-        b.x1 = std::max(b.x1, x + 1), b.y1 = std::max(b.y1, y + 1);
-      }
-  if (b.x1 == 0) return {};
-  return {std::max(0, b.x0 - grow), std::max(0, b.y0 - grow), std::min(m.width, b.x1 + grow),
-          std::min(m.height, b.y1 + grow)};
-}
-// squared_distance_to over the box only: seed(x, y) for the box's pixels, distances by box pixel.
-template <class Seed>
-std::vector<double> squared_distance_in(const PixelBox& b, Seed&& seed) {
-  std::vector<std::uint8_t> s(static_cast<std::size_t>(b.width()) * b.height());
-  for (int y = b.y0; y < b.y1; ++y)
-    for (int x = b.x0; x < b.x1; ++x) s[static_cast<std::size_t>(y - b.y0) * b.width() + (x - b.x0)] = seed(x, y);
-  return squared_distance_to(s, b.width(), b.height());
-}
-}  // namespace detail
 
 // Eq. R11a at pixel (x, y) of the render (alpha, expected depth sum z alpha T): the near side
 // of an occlusion edge with relative depth step delta.
@@ -122,7 +92,7 @@ inline constexpr int overshoot_window_px = 48;
 inline std::array<double, 3> overshoot_quartiles_px(const Mask& m, const std::vector<std::uint8_t>& edge,
                                                     int window = overshoot_window_px) {
   const int W = m.width, H = m.height;
-  const detail::PixelBox b = detail::foreground_box(m, std::max(window, 0));
+  const PixelBox b = foreground_box(m, std::max(window, 0));
   if (b.width() <= 0) return {0.0, 0.0, 0.0};  // no foreground, no contour
   auto seeds = [&](bool inside) {
     return [&, inside](int x, int y) {
@@ -130,8 +100,8 @@ inline std::array<double, 3> overshoot_quartiles_px(const Mask& m, const std::ve
       return edge[q] && (m.data[q] != 0) == inside;
     };
   };
-  const std::vector<double> box_in = detail::squared_distance_in(b, seeds(true));
-  const std::vector<double> box_out = detail::squared_distance_in(b, seeds(false));
+  const std::vector<double> box_in = squared_distance_in(b, seeds(true));
+  const std::vector<double> box_out = squared_distance_in(b, seeds(false));
   std::vector<double> all_in, all_out;  // the whole image's, only when a pixel needs them
   auto whole = [&](bool inside) -> const std::vector<double>& {
     std::vector<double>& d = inside ? all_in : all_out;
@@ -144,17 +114,11 @@ inline std::array<double, 3> overshoot_quartiles_px(const Mask& m, const std::ve
   };
   return contour_quartiles(m, [&](std::size_t q) {  // s(c); no edge pixel at all: no value
     const int x = static_cast<int>(q % static_cast<std::size_t>(W)), y = static_cast<int>(q / static_cast<std::size_t>(W));
-    // Every pixel outside the box lies at least `reach` from (x, y).
-    double reach = no_seed;
-    if (b.x0 > 0) reach = std::min(reach, double(x - b.x0 + 1));
-    if (b.x1 < W) reach = std::min(reach, double(b.x1 - x));
-    if (b.y0 > 0) reach = std::min(reach, double(y - b.y0 + 1));
-    if (b.y1 < H) reach = std::min(reach, double(b.y1 - y));
-    // A box distance within `reach` is the whole image's; one beyond it is an upper bound and
-    // the whole image's is at least reach. The nearer side decides s(c): certain when its
-    // distance is exact and below the other's bound.
-    const std::size_t k = static_cast<std::size_t>(y - b.y0) * b.width() + (x - b.x0);
-    const double r2 = reach * reach;
+    // A box distance within the box's reach is the whole image's; one beyond it is an upper
+    // bound and the whole image's is at least the reach. The nearer side decides s(c): certain
+    // when its distance is exact and below the other's bound.
+    const std::size_t k = b.at(x, y);
+    const double reach = b.reach(x, y, W, H), r2 = reach * reach;
     double d_in = box_in[k], d_out = box_out[k];
     const bool in_exact = d_in <= r2, out_exact = d_out <= r2;
     if (in_exact && !out_exact && d_in < r2) return std::sqrt(d_in);
@@ -196,15 +160,15 @@ inline SnapDirection snap_direction(const std::array<double, 3>& q) {
 // background pixel of any foreground pixel lies in it.
 inline void erode_by_overshoot(Mask& m, double e) {
   if (!(e > 0.0)) return;
-  const detail::PixelBox b = detail::foreground_box(m, 1);
+  const PixelBox b = foreground_box(m, 1);
   if (b.width() <= 0) return;
   const int W = m.width;
-  const std::vector<double> d2 = detail::squared_distance_in(
+  const std::vector<double> d2 = squared_distance_in(
       b, [&](int x, int y) { return m.data[static_cast<std::size_t>(y) * W + x] == 0; });
   for (int y = b.y0; y < b.y1; ++y)
     for (int x = b.x0; x < b.x1; ++x) {
       std::uint8_t& v = m.data[static_cast<std::size_t>(y) * W + x];
-      if (v && !(d2[static_cast<std::size_t>(y - b.y0) * b.width() + (x - b.x0)] > e * e)) v = 0;
+      if (v && !(d2[b.at(x, y)] > e * e)) v = 0;
     }
 }
 

@@ -13,7 +13,8 @@
 //   reach_j = gamma e_j                                                             (Eq. R6b)
 // px (Euclidean) of its foreground are no evidence (unsure): a Gaussian of G_coarse that the
 // undershooting mask leaves out is not counted as background there. With e_j = 0 nothing
-// changes. O(W H) per frame.
+// changes. Two distance transforms per frame, over boxes around the mask (undershoot_px,
+// for_each_within_reach).
 //
 // When the fine vote is split (Eq. R7 kept tau_fine: the masks disagree systematically, as
 // undershooting masks do), ABR (Eq. 9-14) reads each training view's mask widened by its e_j:
@@ -35,18 +36,32 @@
 #include "vcar/core/distance_transform.hpp"
 #include "vcar/core/image.hpp"
 #include "vcar/core/mask_contour.hpp"
+#include "vcar/core/pixel_box.hpp"
 
 namespace vcar {
 
 // Eq. R6a: the undershoot e_j of mask m against the render alpha (same size, one channel), px.
-// 0 when the mask has no contour or the render no background.
-inline double undershoot_px(const Mask& m, const ImageF& alpha) {
+// 0 when the mask has no contour or the render no background. The distance transform runs over
+// the mask's bounding box grown by `window` px; a contour pixel farther from the render's
+// background in the box than the box's reach (the background outside it could be nearer) reads
+// the whole image's transform instead, so the result is the whole image's for any window.
+inline constexpr int undershoot_window_px = 48;
+inline double undershoot_px(const Mask& m, const ImageF& alpha, int window = undershoot_window_px) {
   const int W = m.width, H = m.height;
-  std::vector<std::uint8_t> render_bg(m.data.size());
-  for (std::size_t q = 0; q < render_bg.size(); ++q) render_bg[q] = !(alpha.data[q] >= 0.5f);
-  const std::vector<double> d2 = squared_distance_to(render_bg, W, H);
+  auto background = [&](int x, int y) { return !(alpha.data[static_cast<std::size_t>(y) * W + x] >= 0.5f); };
+  const PixelBox b = foreground_box(m, std::max(window, 0));
+  if (b.width() <= 0) return 0.0;  // no foreground, no contour
+  const std::vector<double> box = squared_distance_in(b, background);
+  std::vector<double> whole;  // the whole image's, only when a pixel needs it
   return contour_median(m, [&](std::size_t q) {
-    return std::isfinite(d2[q]) ? std::max(0.0, std::sqrt(d2[q]) - 1.0) : std::numeric_limits<double>::quiet_NaN();
+    const int x = static_cast<int>(q % static_cast<std::size_t>(W)), y = static_cast<int>(q / static_cast<std::size_t>(W));
+    const double reach = b.reach(x, y, W, H);
+    double d2 = box[b.at(x, y)];
+    if (!(d2 <= reach * reach)) {
+      if (whole.empty()) whole = squared_distance_in(PixelBox{0, 0, W, H}, background);
+      d2 = whole[q];
+    }
+    return std::isfinite(d2) ? std::max(0.0, std::sqrt(d2) - 1.0) : std::numeric_limits<double>::quiet_NaN();
   });
 }
 
@@ -62,13 +77,21 @@ inline float undershoot_threshold(std::vector<double> e, float tau_fine, float t
 }
 
 namespace detail {  // vcar::detail
-// Calls f(q) for every background pixel q of m within reach px (Euclidean) of its foreground.
+// Calls f(q) for every background pixel q of m within reach px (Euclidean) of its foreground:
+// they lie in the foreground's bounding box grown by reach, where the transform runs.
 template <class F>
 void for_each_within_reach(const Mask& m, double reach, F&& f) {
   if (!(reach > 0.0)) return;
-  const std::vector<double> d2 = squared_distance_to(m.data, m.width, m.height);
-  for (std::size_t q = 0; q < m.data.size(); ++q)
-    if (!m.data[q] && d2[q] <= reach * reach) f(q);
+  const int W = m.width;
+  const PixelBox b = foreground_box(m, static_cast<int>(std::min(std::ceil(reach), double(W + m.height))));
+  if (b.width() <= 0) return;
+  const std::vector<double> d2 =
+      squared_distance_in(b, [&](int x, int y) { return m.data[static_cast<std::size_t>(y) * W + x] != 0; });
+  for (int y = b.y0; y < b.y1; ++y)
+    for (int x = b.x0; x < b.x1; ++x) {
+      const std::size_t q = static_cast<std::size_t>(y) * W + x;
+      if (!m.data[q] && d2[b.at(x, y)] <= reach * reach) f(q);
+    }
 }
 }  // namespace detail
 
