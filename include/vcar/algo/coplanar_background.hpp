@@ -116,8 +116,8 @@ std::vector<std::size_t> coplanar_background(const GaussianScene& scene, std::sp
 
   // Seen flat Gaussians within D + r of the centre, in two dense grids (background, selected)
   // of cells of side r / 4 (counting sort, ascending scene index within a cell): a ball of
-  // radius r lies in the 9 x 9 rows of 9 cells around its centre's cell. (Side r / 2 visited
-  // about 1.7 times the points, r / 8 spent more on cells than it saved: docs/notes.)
+  // radius r lies in the 9 x 9 rows of 9 cells around its centre's cell. (Side r / 2 took about
+  // 1.7 times as long, r / 8 spent more on cells than it saved: docs/notes/default-cost-2026-12-04.md.)
   constexpr int span = 4;
   const float reach = rc.max_inlier_distance + r, cell = r / static_cast<float>(span);
   const int dim = static_cast<int>(std::ceil(2.f * reach / cell)) + 1;
@@ -177,21 +177,28 @@ std::vector<std::size_t> coplanar_background(const GaussianScene& scene, std::sp
     const int cx = cell_index(a.mu, 0), cy = cell_index(a.mu, 1), cz = cell_index(a.mu, 2);
     const float half = 0.5f * cell * (std::abs(a.n.x()) + std::abs(a.n.y()) + std::abs(a.n.z())) * 1.001f + w;
     const float h0 = a.n.dot(origin - a.mu + Eigen::Vector3f::Constant(0.5f * cell));  // cell (0, 0, 0)'s centre
-    auto gap = [&](int i, int axis) {  // from mu_a to cell row i's interval along the axis
+    auto gap2 = [&](int i, int axis) {  // squared distance from mu_a to cell row i along the axis
       const float lo = origin[axis] + cell * static_cast<float>(i), m = a.mu[axis];
-      return m < lo ? lo - m : std::max(0.f, m - lo - cell);
+      const float g = m < lo ? lo - m : std::max(0.f, m - lo - cell);
+      return g * g;
     };
-    for (int z = std::max(cz - span, 0); z <= std::min(cz + span, dim - 1); ++z)
-      for (int y = std::max(cy - span, 0); y <= std::min(cy + span, dim - 1); ++y)
+    const float r2 = r * r * 1.001f;
+    for (int z = std::max(cz - span, 0); z <= std::min(cz + span, dim - 1); ++z) {
+      const float gz = gap2(z, 2);
+      if (gz > r2) continue;
+      for (int y = std::max(cy - span, 0); y <= std::min(cy + span, dim - 1); ++y) {
+        const float gyz = gap2(y, 1) + gz;
+        if (gyz > r2) continue;
         for (int x = std::max(cx - span, 0); x <= std::min(cx + span, dim - 1); ++x) {
+          if (gap2(x, 0) + gyz > r2) continue;
           const float h = h0 + cell * (a.n.x() * static_cast<float>(x) + a.n.y() * static_cast<float>(y) + a.n.z() * static_cast<float>(z));
           if (std::abs(h) > half) continue;
-          const float gx = gap(x, 0), gy = gap(y, 1), gz = gap(z, 2);
-          if (gx * gx + gy * gy + gz * gz > r * r * 1.001f) continue;
           const std::size_t c = flat_index(x, y, z);
           for (std::uint32_t e = g.start[c]; e < g.start[c + 1]; ++e)
             if (!f(g.points[e])) return;
         }
+      }
+    }
   };
 
   std::vector<std::uint8_t> drop(selected.size(), 0);

@@ -37,7 +37,7 @@
 // and hemisphere rigs, 3 seeds, 160 x 120, the coarse round's renders of the scene): clean masks
 // median -1 to -5.4, dilated by 2 px 0 to 1, by 4 px 1.4 to 2.8. Per view: three exact distance
 // transforms, two to measure (over the mask's bounding box grown by 48 px, the whole image's only
-// where a contour pixel's nearest edge lies beyond it), one over the mask's bounding box to erode.
+// where that box cannot decide a contour pixel's s(c)), one over the mask's bounding box to erode.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -105,24 +105,19 @@ inline std::array<double, 3> overshoot_quartiles_px(const Mask& m, const std::ve
   std::vector<double> all_in, all_out;  // the whole image's, only when a pixel needs them
   auto whole = [&](bool inside) -> const std::vector<double>& {
     std::vector<double>& d = inside ? all_in : all_out;
-    if (d.empty()) {
-      std::vector<std::uint8_t> s(edge.size());
-      for (std::size_t q = 0; q < edge.size(); ++q) s[q] = edge[q] && (m.data[q] != 0) == inside;
-      d = squared_distance_to(s, W, H);
-    }
+    if (d.empty()) d = squared_distance_in(PixelBox{0, 0, W, H}, seeds(inside));
     return d;
   };
   return contour_quartiles(m, [&](std::size_t q) {  // s(c); no edge pixel at all: no value
     const int x = static_cast<int>(q % static_cast<std::size_t>(W)), y = static_cast<int>(q / static_cast<std::size_t>(W));
-    // A box distance within the box's reach is the whole image's; one beyond it is an upper
-    // bound and the whole image's is at least the reach. The nearer side decides s(c): certain
-    // when its distance is exact and below the other's bound.
-    const std::size_t k = b.at(x, y);
-    const double reach = b.reach(x, y, W, H), r2 = reach * reach;
-    double d_in = box_in[k], d_out = box_out[k];
-    const bool in_exact = d_in <= r2, out_exact = d_out <= r2;
-    if (in_exact && !out_exact && d_in < r2) return std::sqrt(d_in);
-    if (out_exact && !in_exact && d_out < r2) return -std::sqrt(d_out);
+    // A box distance within o (PixelBox::distance_to_outside) is the whole image's; one beyond
+    // it bounds the image's, which is at least o. The nearer side decides s(c): certain when its
+    // distance is below o and the other side's is not exact.
+    const double o = b.distance_to_outside(x, y, W, H), o2 = o * o;
+    double d_in = box_in[b.at(x, y)], d_out = box_out[b.at(x, y)];
+    const bool in_exact = d_in <= o2, out_exact = d_out <= o2;
+    if (!out_exact && d_in < o2) return std::sqrt(d_in);
+    if (!in_exact && d_out < o2) return -std::sqrt(d_out);
     if (!in_exact || !out_exact) {
       d_in = whole(true)[q];
       d_out = whole(false)[q];

@@ -43,7 +43,7 @@ namespace vcar {
 // Eq. R6a: the undershoot e_j of mask m against the render alpha (same size, one channel), px.
 // 0 when the mask has no contour or the render no background. The distance transform runs over
 // the mask's bounding box grown by `window` px; a contour pixel farther from the render's
-// background in the box than the box's reach (the background outside it could be nearer) reads
+// background in the box than from the box's outside (the background there could be nearer) reads
 // the whole image's transform instead, so the result is the whole image's for any window.
 inline constexpr int undershoot_window_px = 48;
 inline double undershoot_px(const Mask& m, const ImageF& alpha, int window = undershoot_window_px) {
@@ -55,9 +55,9 @@ inline double undershoot_px(const Mask& m, const ImageF& alpha, int window = und
   std::vector<double> whole;  // the whole image's, only when a pixel needs it
   return contour_median(m, [&](std::size_t q) {
     const int x = static_cast<int>(q % static_cast<std::size_t>(W)), y = static_cast<int>(q / static_cast<std::size_t>(W));
-    const double reach = b.reach(x, y, W, H);
+    const double o = b.distance_to_outside(x, y, W, H);
     double d2 = box[b.at(x, y)];
-    if (!(d2 <= reach * reach)) {
+    if (!(d2 <= o * o)) {
       if (whole.empty()) whole = squared_distance_in(PixelBox{0, 0, W, H}, background);
       d2 = whole[q];
     }

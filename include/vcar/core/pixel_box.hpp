@@ -21,7 +21,7 @@ struct PixelBox {
   std::size_t at(int x, int y) const { return static_cast<std::size_t>(y - y0) * width() + (x - x0); }
   // Every pixel of a W x H image outside the box lies at least this far from (x, y) inside it
   // (no_seed: the box is the whole image).
-  double reach(int x, int y, int W, int H) const {
+  double distance_to_outside(int x, int y, int W, int H) const {
     double r = no_seed;
     if (x0 > 0) r = std::min(r, double(x - x0 + 1));
     if (x1 < W) r = std::min(r, double(x1 - x));
@@ -48,7 +48,8 @@ inline PixelBox foreground_box(const Mask& m, int grow) {
 
 // squared_distance_to over the box only: seed(x, y) for the box's pixels, distances by box
 // position (PixelBox::at). Exact for the image when every seed lies in the box; otherwise a
-// distance d2 with d2 <= reach^2 (PixelBox::reach) is, and a larger one bounds it from above.
+// distance d2 <= o^2, o = PixelBox::distance_to_outside, is, and a larger one bounds the image's
+// from above (which is at least o).
 template <class Seed>
 std::vector<double> squared_distance_in(const PixelBox& b, Seed&& seed) {
   std::vector<std::uint8_t> s(static_cast<std::size_t>(b.width()) * b.height());
