@@ -4,6 +4,8 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <random>
+#include <utility>
 #include <vector>
 
 #include "vcar/algo/overshoot.hpp"
@@ -213,5 +215,26 @@ TEST_CASE("Eq. R11b's quartiles against brute force: a dilated disc erodes, an e
     // outside the window could be nearer: the same quartiles for any window.
     for (int window : {0, 1, 2, 3, 5})
       for (int k = 0; k < 3; ++k) CHECK(vcar::overshoot_quartiles_px(c.m, e, window)[k] == got[k]);
+  }
+}
+
+TEST_CASE("Eq. R11a over the render equals its per-pixel rule on random renders") {
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> U(0.f, 1.f);
+  for (auto [W, H] : {std::pair{31, 17}, std::pair{1, 9}, std::pair{12, 1}}) {
+    ImageF alpha(W, H, 1), depth(W, H, 1);
+    for (std::size_t q = 0; q < alpha.data.size(); ++q) {
+      alpha.data[q] = U(rng) < 0.2f ? 0.3f : 0.5f + 0.5f * U(rng);
+      depth.data[q] = alpha.data[q] * (U(rng) < 0.5f ? 1.f + 0.04f * U(rng) : 2.f);  // steps and near-ties
+    }
+    const std::vector<std::uint8_t> e = vcar::occlusion_edges(alpha, depth, 0.05f);
+    std::size_t edges = 0;
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) {
+        CAPTURE(W, H, x, y);
+        REQUIRE((e[static_cast<std::size_t>(y) * W + x] != 0) == vcar::occlusion_edge_at(alpha, depth, 0.05f, x, y));
+        edges += vcar::occlusion_edge_at(alpha, depth, 0.05f, x, y);
+      }
+    CHECK(edges > 0);
   }
 }

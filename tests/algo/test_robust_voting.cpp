@@ -1,8 +1,11 @@
 #include <catch2/catch.hpp>
 
+#include <array>
+#include <cmath>
 #include <random>
 
 #include "vcar/algo/robust_voting.hpp"
+#include "vcar/algo/undershoot.hpp"
 #include "vcar/algo/visibility_voting.hpp"
 
 #include "point_scene.hpp"
@@ -313,5 +316,98 @@ TEST_CASE("Eq. R13 against brute force: view weights and weighted counts on rand
     for (std::size_t j = 0; j < masks.size(); ++j) { bool s; const bool f = at(i, j, s); V += s ? r[j] : 0; F += f ? r[j] : 0; }
     CAPTURE(i);
     CHECK(v.ratio(i) == Approx((F + 1.0 * R0[i]) / (V + 1.0)).margin(1e-5));
+  }
+}
+
+TEST_CASE("RobustVoting decides whole chunks exactly as mean by mean: every counter and R13's weights (brute force)") {
+  // A dense floor (z = 3) and a dense box in front of it (z about 2), so that many chunks of 256
+  // means fall wholly on one side of the masks, the render's surface and R6's band; a render whose
+  // surface is the box where it covers it, the floor elsewhere, nothing in one corner; masks of
+  // the box that undershoot the render by 0-3 px. Each counter equals the per-mean rules (Eq. 1,
+  // 2, R3, R6b) applied to each mean, projected one at a time.
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<float> U(-1.f, 1.f);
+  std::vector<Eigen::Vector3f> mus;
+  for (int i = 0; i < 12000; ++i) mus.push_back({1.6f * U(rng), 1.2f * U(rng), 3.f + 0.01f * U(rng)});
+  for (int i = 0; i < 6000; ++i) mus.push_back({0.4f * U(rng), 0.3f * U(rng), 2.f + 0.2f * U(rng)});
+  const auto scene = scene_of(mus);
+  constexpr int W = 64, H = 48;
+  vcar::RobustVoteOptions o{2.f, 1.5f, true};
+  vcar::RobustVoting v(scene, o);
+  std::vector<std::vector<std::uint8_t>> seen, fg;  // brute force: per view, per mean
+  std::array<std::vector<int>, 6> count;
+  for (auto& c : count) c.assign(mus.size(), 0);
+  for (int j = 0; j < 8; ++j) {
+    const Camera c = Camera::look_at({0.3f * std::cos(0.8f * j), 0.2f * std::sin(0.8f * j), 0.f}, {0, 0, 3.f},
+                                     {0, -1, 0}, {W, H, 40, 40, 32.f, 24.f}, "c" + std::to_string(j));
+    // The render: project the box's corners for its pixel rectangle.
+    int bx0 = W, by0 = H, bx1 = -1, by1 = -1;
+    for (float sx : {-0.4f, 0.4f})
+      for (float sy : {-0.3f, 0.3f})
+        for (float sz : {1.8f, 2.2f}) {
+          const Eigen::Vector3f q = c.R_w * Eigen::Vector3f(sx, sy, sz) + c.t_w;
+          const int u = static_cast<int>(std::floor(c.fx * q.x() / q.z() + c.cx)), w = static_cast<int>(std::floor(c.fy * q.y() / q.z() + c.cy));
+          bx0 = std::min(bx0, u), bx1 = std::max(bx1, u), by0 = std::min(by0, w), by1 = std::max(by1, w);
+        }
+    ImageF depth(W, H, 1), alpha(W, H, 1);
+    Mask m(W, H, 1);
+    const int e = j % 4;  // the mask's undershoot
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) {
+        const std::size_t p = static_cast<std::size_t>(y) * W + x;
+        const bool box = x >= bx0 && x <= bx1 && y >= by0 && y <= by1;
+        alpha.data[p] = x < 6 && y < 6 ? 0.2f : 0.9f;
+        depth.data[p] = alpha.data[p] * (box ? 1.9f + 0.01f * static_cast<float>(x % 7) : 3.f);
+        m.data[p] = x >= bx0 + e && x <= bx1 - e && y >= by0 + e && y <= by1 - e ? 255 : 0;
+      }
+    v.add_view(c, &m, &depth, &alpha, 0.05f);
+    // Brute force, the rules of the file's top: the sure plane from Eq. R6a-b as the vote builds it.
+    std::vector<std::uint8_t> sure(m.data.size(), 255);
+    vcar::widen_outer_band(m, o.gamma * vcar::undershoot_px(m, alpha), sure);
+    const vcar::detail::MeanProjection P = vcar::detail::MeanProjection::from(c);
+    seen.emplace_back(mus.size(), 0);
+    fg.emplace_back(mus.size(), 0);
+    for (std::size_t i = 0; i < mus.size(); ++i) {
+      std::int32_t pix[vcar::detail::mean_batch], vis[vcar::detail::mean_batch];
+      float z[vcar::detail::mean_batch];
+      vcar::detail::project_tail(P, &mus[i].x(), &mus[i].y(), &mus[i].z(), 1, pix, vis, z);
+      if (!vis[0]) continue;
+      const std::size_t p = static_cast<std::size_t>(pix[0]);
+      const int f = m.data[p] != 0;
+      ++count[0][i], count[1][i] += f;
+      if (alpha.data[p] >= 0.5f && !(z[0] <= depth.data[p] / alpha.data[p] * 1.05f)) continue;
+      ++count[2][i], count[3][i] += f;
+      seen.back()[i] = 1, fg.back()[i] = static_cast<std::uint8_t>(f);
+      if (!sure[p]) continue;
+      ++count[4][i], count[5][i] += f;
+    }
+  }
+  CAPTURE(v.whole_chunks(), v.chunk_views());
+  CHECK(v.whole_chunks() > v.chunk_views() / 10);  // the whole-chunk path is what is tested
+  CHECK(v.whole_chunks() < v.chunk_views());      // and the per-mean one as well
+  std::size_t occluded = 0, unsure = 0;
+  for (std::size_t i = 0; i < mus.size(); ++i) {
+    CAPTURE(i);
+    for (int level = 0; level < 3; ++level) {
+      REQUIRE(v.visible(i, level) == count[2 * level][i]);
+      REQUIRE(v.foreground(i, level) == count[2 * level + 1][i]);
+    }
+    occluded += count[2][i] < count[0][i];
+    unsure += count[4][i] < count[2][i];
+  }
+  CHECK(occluded > 1000);  // Eq. R3 and R6b acted
+  CHECK(unsure > 100);
+  // R13's weights (Eq. R13a) from the brute-force bits and the vote's own consensus at 0.5.
+  std::vector<std::uint8_t> S(mus.size());
+  for (std::size_t i = 0; i < mus.size(); ++i) S[i] = v.ratio(i) >= 0.5f;
+  const std::vector<float> r = v.weigh_views(0.5f, 1);
+  for (std::size_t j = 0; j < seen.size(); ++j) {
+    int a = 0, b = 0, cc = 0;
+    for (std::size_t i = 0; i < mus.size(); ++i) {
+      if (!seen[j][i]) continue;
+      a += S[i] && fg[j][i]; b += !S[i] && fg[j][i]; cc += S[i] && !fg[j][i];
+    }
+    CAPTURE(j);
+    CHECK(r[j] == Approx(a + b + cc ? static_cast<float>(a) / static_cast<float>(a + b + cc) : 1.f).margin(1e-6));
   }
 }

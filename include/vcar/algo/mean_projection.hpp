@@ -125,6 +125,8 @@ struct BoxView {
   Case visibility = partial;
   int x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // pixel rectangle holding every visible projected mean
   float zmin = 0.f;                    // smallest camera depth of the corners (when in front)
+  float zmax = 0.f;                    // greatest, plus the rounding margin: every mean's depth as
+                                       // project() computes it is at most this (when in front)
 };
 
 // Views in SIMD lanes (lane l: one view's projection), for project_boxes.
@@ -161,12 +163,13 @@ struct ViewLanes {
 struct BoxViewLanes {
   static constexpr std::size_t L = simd::width;
   alignas(64) std::int32_t visibility[L], x0[L], y0[L], x1[L], y1[L];
-  alignas(64) float zmin[L];
+  alignas(64) float zmin[L], zmax[L];
   BoxView operator[](std::size_t l) const {
     BoxView v;
     v.visibility = static_cast<BoxView::Case>(visibility[l]);
     v.x0 = x0[l], v.y0 = y0[l], v.x1 = x1[l], v.y1 = y1[l];
     v.zmin = zmin[l];
+    v.zmax = zmax[l];
     return v;
   }
 };
@@ -250,6 +253,7 @@ inline void project_boxes(const ViewLanes& w, const BoxLanes& b, BoxViewLanes& o
   pixel(umax, W1, W1).store_aligned(out.x1);
   pixel(vmax, H1, H1).store_aligned(out.y1);
   simd::select(inside, zmin, zero).store_aligned(out.zmin);
+  simd::select(inside, zmax + dz, zero).store_aligned(out.zmax);
   const B none(static_cast<float>(BoxView::none_visible)), every(static_cast<float>(BoxView::all_visible)),
       partial(static_cast<float>(BoxView::partial));
   simd::to_int(simd::select(behind | outside, none, simd::select(all, every, partial))).store_aligned(out.visibility);

@@ -75,10 +75,23 @@ inline bool occlusion_edge_at(const ImageF& alpha, const ImageF& depth, float de
 
 // Eq. R11a over the whole render: 1 where the pixel is the near side of an occlusion edge.
 inline std::vector<std::uint8_t> occlusion_edges(const ImageF& alpha, const ImageF& depth, float delta) {
-  std::vector<std::uint8_t> e(alpha.data.size(), 0);
-  for (int y = 0; y < alpha.height; ++y)
-    for (int x = 0; x < alpha.width; ++x)
-      e[static_cast<std::size_t>(y) * alpha.width + x] = occlusion_edge_at(alpha, depth, delta, x, y);
+  // occlusion_edge_at at every pixel, each pixel's surface depth D / A divided once.
+  const int W = alpha.width, H = alpha.height;
+  std::vector<float> s(alpha.data.size());
+  std::vector<std::uint8_t> has(alpha.data.size()), e(alpha.data.size(), 0);
+  for (std::size_t q = 0; q < s.size(); ++q) {
+    has[q] = alpha.data[q] >= 0.5f;
+    s[q] = depth.data[q] / alpha.data[q];
+  }
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      const std::size_t q = static_cast<std::size_t>(y) * W + x;
+      if (!has[q]) continue;
+      const float near = s[q] * (1.f + delta);
+      auto far_side = [&](std::size_t r) { return !has[r] || s[r] > near; };  // no surface: infinitely far
+      e[q] = (x > 0 && far_side(q - 1)) || (x + 1 < W && far_side(q + 1)) || (y > 0 && far_side(q - W)) ||
+             (y + 1 < H && far_side(q + W));
+    }
   return e;
 }
 

@@ -29,16 +29,24 @@
 //                   view by how its mask agrees with the round's consensus, and the unoccluded
 //                   level sums r_j instead of counting views; two bits
 //                   per candidate and view.
-// Views are voted one at a time over all candidates in parallel chunks; each candidate is
-// written by one thread, so results are identical for any thread count.
+// Views are voted one at a time. The candidates are kept in Morton order with their means copied
+// (detail::ChunkedMeans, as VisibilityVoting) so that a view decides a whole chunk of 256 at once
+// where the chunk's box projects clearly off the image (no evidence), or clearly inside it over
+// mask tiles that are all background or all foreground, in front of the render's surface over
+// the whole box (MinPyramid of D / A (1 + tolerance)), and over R6's sure plane uniformly; the
+// other chunks are voted mean by mean. The counts are exactly those of the per-mean rules either
+// way. Each chunk is written by one thread, so results are identical for any thread count.
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "vcar/algo/chunked_means.hpp"
 #include "vcar/algo/mean_projection.hpp"
 #include "vcar/algo/undershoot.hpp"
 #include "vcar/algo/view_reliability.hpp"
@@ -46,6 +54,8 @@
 #include "vcar/core/error.hpp"
 #include "vcar/core/gaussian_scene.hpp"
 #include "vcar/core/image.hpp"
+#include "vcar/core/mask_tiles.hpp"
+#include "vcar/core/min_pyramid.hpp"
 #include "vcar/core/parallel.hpp"
 
 namespace vcar {
@@ -60,17 +70,17 @@ struct RobustVoteOptions {
 class RobustVoting {
 public:
   static constexpr std::size_t max_views = 65535;  // uint16_t counters
-  std::size_t chunk = 4096;                        // candidates per parallel task (fixed)
+  std::size_t chunk = 4096;  // candidates per parallel task (rounded to whole chunks of 256; fixed)
 
-  // Every Gaussian of `scene` is a candidate (means referenced: the scene must outlive this).
+  // Every Gaussian of `scene` is a candidate (its means are copied).
   explicit RobustVoting(const GaussianScene& scene, const RobustVoteOptions& o = {}) : o_(o) {
     init(scene.mean[0].data(), scene.mean[1].data(), scene.mean[2].data(), scene.size());
   }
-  // The Gaussians `candidates` of `scene` (scene indices, any order; means copied).
+  // The Gaussians `candidates` of `scene` (scene indices, any order).
   RobustVoting(const GaussianScene& scene, std::vector<Index> candidates, const RobustVoteOptions& o = {})
       : o_(o), candidates_(std::move(candidates)) {
-    own_ = detail::candidate_means(scene, candidates_);
-    init(own_[0].data(), own_[1].data(), own_[2].data(), candidates_.size());
+    const auto own = detail::candidate_means(scene, candidates_);
+    init(own[0].data(), own[1].data(), own[2].data(), candidates_.size());
   }
   RobustVoting(const RobustVoting&) = delete;
   RobustVoting& operator=(const RobustVoting&) = delete;
@@ -91,59 +101,64 @@ public:
         throw Error("depth/alpha image is not the view's size with one channel", where);
     if (views_ + 1 > max_views) throw Error("more than 65535 views with masks (uint16_t counters)", where);
     if (!(o_.kappa >= 0.f)) throw Error("kappa must be >= 0", "voting");
-    if (o_.reliability && chunk % 64 != 0) throw Error("chunk must be a multiple of 64 with reliability", "voting");
     ++views_;
     weighed_ = false;
     if (o_.reliability) rel_.add_view();
-    const std::uint8_t* sure = nullptr;  // null: every pixel is sure
+    View v;
+    v.M = mask->data.data();
     if (sure_level() && alpha) {
       last_undershoot_ = undershoot_px(*mask, *alpha);                                     // Eq. R6a
       const double reach = o_.gamma * last_undershoot_;                                    // Eq. R6b
       if (reach > 0.0) {
-        outer_.assign(mask->data.size(), 255);
-        widen_outer_band(*mask, reach, outer_);
-        sure = outer_.data();
+        sure_ = Mask(mask->width, mask->height, 1, 255);
+        widen_outer_band(*mask, reach, sure_.data);
+        sure_tiles_.build(sure_);
+        v.sure = sure_.data.data();
       }
     }
-    const bool sure_counts = sure_level();
-    const detail::MeanProjection P = detail::MeanProjection::from(camera);
-    const std::uint8_t* M = mask->data.data();
-    const float* D = expected_depth ? expected_depth->data.data() : nullptr;
-    const float* A = alpha ? alpha->data.data() : nullptr;
-    const float scale = 1.f + tolerance;
-    parallel_chunks(static_cast<std::int64_t>(n_), static_cast<std::int64_t>(chunk),
+    tiles_.build(*mask);
+    if (expected_depth) {
+      v.D = expected_depth->data.data();
+      v.A = alpha->data.data();
+      v.scale = 1.f + tolerance;
+      // Eq. R3's bound per pixel, exactly as the per-mean test computes it; no surface: +inf.
+      surface_.build(camera.width, camera.height, [&](std::size_t p) {
+        return v.A[p] >= 0.5f ? v.D[p] / v.A[p] * v.scale : std::numeric_limits<float>::infinity();
+      });
+    }
+    v.P = detail::MeanProjection::from(camera);
+    const detail::ViewLanes lanes = detail::ViewLanes::of(v.P);
+    constexpr std::size_t C = detail::ChunkedMeans::chunk_size, VL = simd::width;
+    const std::size_t per_task = (std::max<std::size_t>(1, chunk / C) + VL - 1) / VL * VL;
+    parallel_chunks(static_cast<std::int64_t>(means_.chunks()), static_cast<std::int64_t>(per_task),
                     [&](std::int64_t, std::int64_t b, std::int64_t e) {
-      constexpr std::size_t L = detail::mean_batch;
-      alignas(64) std::int32_t pix[L], vis[L];
-      alignas(64) float z[L];
-      for (std::size_t i0 = static_cast<std::size_t>(b); i0 < static_cast<std::size_t>(e); i0 += L) {
-        const std::size_t m = std::min(L, static_cast<std::size_t>(e) - i0);
-        if (m == L) detail::project_batch(P, x_ + i0, y_ + i0, z_ + i0, pix, vis, z);
-        else detail::project_tail(P, x_ + i0, y_ + i0, z_ + i0, m, pix, vis, z);
-        for (std::size_t l = 0; l < m; ++l) {
-          if (!vis[l]) continue;
-          const std::size_t i = i0 + l, p = static_cast<std::size_t>(pix[l]);
-          const std::uint16_t f = M[p] != 0;
-          ++c_[0][i]; c_[1][i] = static_cast<std::uint16_t>(c_[1][i] + f);                  // Eq. 2
-          if (D && A[p] >= 0.5f && !(z[l] <= D[p] / A[p] * scale)) continue;                  // Eq. R3
-          ++c_[2][i]; c_[3][i] = static_cast<std::uint16_t>(c_[3][i] + f);
-          if (o_.reliability) rel_.see(i, f != 0);                                            // Eq. R13
-          if (!sure_counts || (sure && !sure[p])) continue;                                    // Eq. R6b
-          ++c_[4][i]; c_[5][i] = static_cast<std::uint16_t>(c_[5][i] + f);
-        }
+      detail::BoxViewLanes boxes;
+      std::size_t whole = 0;
+      for (std::size_t c0 = static_cast<std::size_t>(b); c0 < static_cast<std::size_t>(e); c0 += VL) {
+        const std::size_t count = std::min(VL, static_cast<std::size_t>(e) - c0);
+        detail::project_boxes(lanes, detail::BoxLanes::of(means_.box.data() + c0, count), boxes);
+        for (std::size_t l = 0; l < count; ++l) whole += vote_chunk(v, c0 + l, boxes[l]);
       }
+      whole_chunks_ += whole;
     });
   }
 
   std::size_t size() const noexcept { return n_; }
   std::size_t views() const noexcept { return views_; }
   Index candidate(std::size_t k) const { return candidates_.empty() ? static_cast<Index>(k) : candidates_[k]; }
+  // (chunk, view) pairs decided whole (off the image, or from the chunk's box), and all of them.
+  std::size_t whole_chunks() const noexcept { return whole_chunks_; }
+  std::size_t chunk_views() const noexcept { return means_.chunks() * views_; }
   // Counters of candidate k: level 0 plain (V, F), 1 unoccluded (V^o, F^o), 2 sure (V^s, F^s;
   // the unoccluded level's without R6).
-  std::uint16_t visible(std::size_t k, int level = 0) const { return c_[2 * at(level)][k]; }
-  std::uint16_t foreground(std::size_t k, int level = 0) const { return c_[2 * at(level) + 1][k]; }
+  std::uint16_t visible(std::size_t k, int level = 0) const { return c_[2 * at(level)][rank_[k]]; }
+  std::uint16_t foreground(std::size_t k, int level = 0) const { return c_[2 * at(level) + 1][rank_[k]]; }
   // V^o of every candidate (level 1), aligned with the candidates.
-  std::span<const std::uint16_t> unoccluded_views() const { return c_[2]; }
+  std::span<const std::uint16_t> unoccluded_views() const {
+    unoccluded_.resize(n_);
+    for (std::size_t j = 0; j < n_; ++j) unoccluded_[means_.order[j]] = c_[2][j];
+    return unoccluded_;
+  }
   // Eq. R13: weighs the views voted so far by their agreement with the consensus at `tau`
   // (first the unweighted vote's, then the weighted one's, `iterations` times); the unoccluded
   // level then sums the weights. No effect without the reliability option. Returns r_j.
@@ -151,7 +166,7 @@ public:
     if (!o_.reliability) return view_weights_;
     weighed_ = false;
     for (int it = 0; it < iterations; ++it) {
-      const auto consensus = rel_.bits([&](std::size_t k) { return ratio(k) >= tau; });
+      const auto consensus = rel_.bits([&](std::size_t j) { return ratio_at(j, true) >= tau; });
       view_weights_ = rel_.agreement(consensus);                                             // Eq. R13a
       rel_.weighted(view_weights_, rv_, rf_);                                                // Eq. R13b
       weighed_ = true;
@@ -163,31 +178,15 @@ public:
 
   // Eq. R2 (Eq. 3 at level 0), with Eq. R13b's sums at level 1 once the views are weighed.
   // undershoot = false: the vote without Eq. R6 (R^1, what R6's gate reads).
-  float ratio(std::size_t k, bool undershoot = true) const {
-    // A level with the same counts as the one below adds no evidence: R stays what it was, bit
-    // for bit (so Eq. 3 comes out identical whenever the mechanisms add nothing). Once R13
-    // weighed the views the unoccluded level always sums them, so it always shrinks.
-    float R = static_cast<float>(foreground(k)) / static_cast<float>(std::max<std::uint16_t>(visible(k), 1));
-    const int top = undershoot && sure_level() ? 2 : 1;
-    for (int level = 1; level <= top; ++level) {
-      const bool same = visible(k, level) == visible(k, level - 1) && foreground(k, level) == foreground(k, level - 1);
-      const bool weighed = weighed_ && level == 1;  // Eq. R13b
-      if (same && !weighed) continue;
-      float V = static_cast<float>(visible(k, level));
-      float F = static_cast<float>(foreground(k, level));
-      if (weighed) V = rv_[k], F = rf_[k];
-      if (V + o_.kappa > 0.f) R = (F + o_.kappa * R) / (V + o_.kappa);                    // Eq. R2
-    }
-    return R;
-  }
+  float ratio(std::size_t k, bool undershoot = true) const { return ratio_at(rank_[k], undershoot); }
   // Eq. 3 / R2 for candidate k (undershoot as in ratio()).
   bool kept(std::size_t k, float tau, bool undershoot = true) const { return ratio(k, undershoot) >= tau; }
   // Scene indices (ascending) of the kept candidates, and their R_i (undershoot as in ratio()).
   void selected(float tau, std::vector<Index>& indices, std::vector<float>& scores, bool undershoot = true) const {
     std::vector<std::pair<Index, float>> out;
-    for (std::size_t k = 0; k < n_; ++k) {
-      const float R = ratio(k, undershoot);
-      if (R >= tau) out.push_back({candidate(k), R});
+    for (std::size_t j = 0; j < n_; ++j) {
+      const float R = ratio_at(j, undershoot);
+      if (R >= tau) out.push_back({candidate(means_.order[j]), R});
     }
     std::sort(out.begin(), out.end());
     indices.clear();
@@ -196,27 +195,116 @@ public:
   }
 
 private:
+  // One view's images, as the per-mean rules read them (null: not given).
+  struct View {
+    detail::MeanProjection P;
+    const std::uint8_t* M = nullptr;     // the mask
+    const std::uint8_t* sure = nullptr;  // Eq. R6b's sure plane (null: every pixel is sure)
+    const float *D = nullptr, *A = nullptr;  // Eq. R3's render
+    float scale = 1.f;                   // 1 + tolerance
+  };
+
   bool sure_level() const noexcept { return o_.gamma > 0.f; }
   int at(int level) const noexcept { return level == 2 && !sure_level() ? 1 : level; }
 
+  // Counters of sorted positions [j0, j0 + count) += (1, f) at `level`.
+  void add_all(int level, std::size_t j0, std::size_t count, std::uint16_t f) {
+    std::uint16_t* V = c_[2 * level].data() + j0;
+    std::uint16_t* F = c_[2 * level + 1].data() + j0;
+    for (std::size_t j = 0; j < count; ++j) V[j] = static_cast<std::uint16_t>(V[j] + 1);
+    if (f)
+      for (std::size_t j = 0; j < count; ++j) F[j] = static_cast<std::uint16_t>(F[j] + 1);
+  }
+
+  // The vote of chunk c in view v, whole when its box decides it (see the top of the file):
+  // returns whether it did.
+  bool vote_chunk(const View& v, std::size_t c, const detail::BoxView& b) {
+    if (b.visibility == detail::BoxView::none_visible) return true;                         // Eq. 1: no evidence
+    constexpr std::size_t C = detail::ChunkedMeans::chunk_size, L = detail::mean_batch;
+    const std::size_t j0 = c * C;
+    const bool sure_counts = sure_level();
+    if (b.visibility == detail::BoxView::all_visible) {
+      const MaskTiles::Content content = tiles_.classify(b.x0, b.y0, b.x1, b.y1);
+      const MaskTiles::Content sure = v.sure ? sure_tiles_.classify(b.x0, b.y0, b.x1, b.y1) : MaskTiles::foreground;
+      const bool unoccluded = !v.D || b.zmax <= surface_.min_over(b.x0, b.y0, b.x1, b.y1);  // Eq. R3, whole
+      if (content != MaskTiles::mixed && sure != MaskTiles::mixed && unoccluded) {
+        const std::size_t count = std::min(n_, j0 + C) - j0;
+        const std::uint16_t f = content == MaskTiles::foreground;
+        add_all(0, j0, count, f);                                                          // Eq. 2
+        add_all(1, j0, count, f);
+        if (o_.reliability) rel_.see_all(j0, j0 + count, f != 0);                          // Eq. R13
+        if (sure_counts && sure == MaskTiles::foreground) add_all(2, j0, count, f);        // Eq. R6b
+        return true;
+      }
+    }
+    const float* x = means_.xyz[0].data();
+    const float* y = means_.xyz[1].data();
+    const float* z = means_.xyz[2].data();
+    alignas(64) std::int32_t pix[L], vis[L];
+    alignas(64) float depth[L];
+    for (std::size_t i0 = j0; i0 < j0 + C; i0 += L) {
+      detail::project_batch(v.P, x + i0, y + i0, z + i0, pix, vis, depth);
+      for (std::size_t l = 0; l < L; ++l) {
+        if (!vis[l]) continue;
+        const std::size_t j = i0 + l, p = static_cast<std::size_t>(pix[l]);
+        const std::uint16_t f = v.M[p] != 0;
+        ++c_[0][j]; c_[1][j] = static_cast<std::uint16_t>(c_[1][j] + f);                    // Eq. 2
+        if (v.D && v.A[p] >= 0.5f && !(depth[l] <= v.D[p] / v.A[p] * v.scale)) continue;     // Eq. R3
+        ++c_[2][j]; c_[3][j] = static_cast<std::uint16_t>(c_[3][j] + f);
+        if (o_.reliability) rel_.see(j, f != 0);                                            // Eq. R13
+        if (!sure_counts || (v.sure && !v.sure[p])) continue;                                // Eq. R6b
+        ++c_[4][j]; c_[5][j] = static_cast<std::uint16_t>(c_[5][j] + f);
+      }
+    }
+    return false;
+  }
+
+  // Eq. R2 by sorted position j.
+  float ratio_at(std::size_t j, bool undershoot) const {
+    // A level with the same counts as the one below adds no evidence: R stays what it was, bit
+    // for bit (so Eq. 3 comes out identical whenever the mechanisms add nothing). Once R13
+    // weighed the views the unoccluded level always sums them, so it always shrinks.
+    auto V_at = [&](int level) { return c_[2 * at(level)][j]; };
+    auto F_at = [&](int level) { return c_[2 * at(level) + 1][j]; };
+    float R = static_cast<float>(F_at(0)) / static_cast<float>(std::max<std::uint16_t>(V_at(0), 1));
+    const int top = undershoot && sure_level() ? 2 : 1;
+    for (int level = 1; level <= top; ++level) {
+      const bool same = V_at(level) == V_at(level - 1) && F_at(level) == F_at(level - 1);
+      const bool weighed = weighed_ && level == 1;  // Eq. R13b
+      if (same && !weighed) continue;
+      float V = static_cast<float>(V_at(level));
+      float F = static_cast<float>(F_at(level));
+      if (weighed) V = rv_[j], F = rf_[j];
+      if (V + o_.kappa > 0.f) R = (F + o_.kappa * R) / (V + o_.kappa);                    // Eq. R2
+    }
+    return R;
+  }
+
   void init(const float* x, const float* y, const float* z, std::size_t n) {
-    x_ = x; y_ = y; z_ = z; n_ = n;
+    n_ = n;
+    means_ = detail::ChunkedMeans(x, y, z, n);
+    rank_.resize(n);
+    for (std::size_t j = 0; j < n; ++j) rank_[means_.order[j]] = static_cast<std::uint32_t>(j);
     const std::size_t counters = sure_level() ? 6 : 4;
     for (std::size_t c = 0; c < counters; ++c) c_[c].assign(n, 0);
     if (o_.reliability) rel_ = ViewReliability(n);
   }
 
   RobustVoteOptions o_;
-  const float *x_ = nullptr, *y_ = nullptr, *z_ = nullptr;
   std::size_t n_ = 0, views_ = 0;
-  std::vector<Index> candidates_;
-  std::array<std::vector<float>, 3> own_;
-  std::array<std::vector<std::uint16_t>, 6> c_;  // V, F, V^o, F^o, V^s, F^s (the last two with R6)
-  std::vector<std::uint8_t> outer_;      // Eq. R6b: the sure plane with the outer band
+  std::vector<Index> candidates_;        // empty: candidate k is scene index k
+  detail::ChunkedMeans means_;           // Morton-sorted means and chunk boxes
+  std::vector<std::uint32_t> rank_;      // candidate k -> sorted position
+  std::array<std::vector<std::uint16_t>, 6> c_;  // V, F, V^o, F^o, V^s, F^s by sorted position (the last two with R6)
+  mutable std::vector<std::uint16_t> unoccluded_;  // V^o by candidate (unoccluded_views)
+  MaskTiles tiles_, sure_tiles_;         // the view's mask and Eq. R6b's sure plane, summarised
+  MinPyramid surface_;                   // Eq. R3's bound D / A (1 + tolerance) per pixel
+  Mask sure_;                            // Eq. R6b: the sure plane with the outer band (255 = sure)
   double last_undershoot_ = 0;
-  ViewReliability rel_;                  // Eq. R13: V_j, F_j per view
-  std::vector<float> view_weights_, rv_, rf_;  // r_j; V^r, F^r per candidate
+  ViewReliability rel_;                  // Eq. R13: V_j, F_j per view, by sorted position
+  std::vector<float> view_weights_, rv_, rf_;  // r_j; V^r, F^r by sorted position
   bool weighed_ = false;
+  std::atomic<std::size_t> whole_chunks_{0};
 };
 
 }  // namespace vcar

@@ -16,6 +16,7 @@
 // first and the weighted one after (RobustVoting::weigh_views iterates).
 //
 // Storage: two bits per candidate and view (V_j and F_j), n / 4 bytes per view.
+#include <algorithm>
 #include <bit>
 #include <cstddef>
 #include <cstdint>
@@ -42,6 +43,15 @@ public:
     const std::uint64_t bit = std::uint64_t{1} << (k & 63);
     seen_.back()[k >> 6] |= bit;
     if (in_mask) fg_.back()[k >> 6] |= bit;
+  }
+  // see(k, in_mask) for every k in [k0, k1), k0 a multiple of 64 (a word at a time).
+  void see_all(std::size_t k0, std::size_t k1, bool in_mask) {
+    for (std::size_t k = k0; k < k1; k += 64) {
+      const std::size_t count = std::min<std::size_t>(64, k1 - k);
+      const std::uint64_t bits = count == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << count) - 1;
+      seen_.back()[k >> 6] |= bits;
+      if (in_mask) fg_.back()[k >> 6] |= bits;
+    }
   }
 
   // Eq. R13a for every view, the consensus S as a bitset of n bits (ViewReliability::bits).
