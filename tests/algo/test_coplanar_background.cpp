@@ -4,6 +4,8 @@
 #include <random>
 #include <set>
 
+#include <Eigen/Geometry>
+
 #include "vcar/algo/coplanar_background.hpp"
 #include "vcar/algo/params.hpp"
 
@@ -261,4 +263,41 @@ TEST_CASE("Eq. R10 equals its brute force on random discs (the grids and the sla
     CHECK(got == want);
     CHECK_FALSE(want.empty());  // the case tests something
   }
+}
+
+TEST_CASE("Eq. R10's normal bins: a normal within alpha of a candidate's (either sign) is in a bin near it") {
+  // The bins only skip: every pair within alpha must be kept, whatever the faces and cells.
+  std::mt19937 rng(19);
+  std::normal_distribution<float> N(0.f, 1.f);
+  using Bins = vcar::detail::NormalBins;
+  for (const float alpha_deg : {1.f, 5.f, 20.f}) {
+    const float alpha = alpha_deg * 3.14159265f / 180.f;
+    const Bins::Cosines cosines = Bins::cosines(alpha);
+    std::size_t kept = 0, pairs = 0;
+    for (int t = 0; t < 20000; ++t) {
+      const Eigen::Vector3f n = Eigen::Vector3f(N(rng), N(rng), N(rng)).normalized();
+      // d: n turned by up to alpha about a random axis, and flipped half the time.
+      const Eigen::Vector3f axis = n.cross(Eigen::Vector3f(N(rng), N(rng), N(rng))).normalized();
+      const float angle = alpha * std::uniform_real_distribution<float>(0.f, 0.999f)(rng);
+      Eigen::Vector3f d = Eigen::AngleAxisf(angle, axis) * n;
+      if (t % 2) d = -d;
+      const Bins::Set near = Bins::near(n, cosines);
+      CAPTURE(alpha_deg, n.transpose(), d.transpose());
+      REQUIRE(Bins::in(near, Bins::of(d)));
+      for (int b = 0; b < Bins::count; ++b) kept += Bins::in(near, b);
+      pairs += Bins::count;
+    }
+    if (alpha_deg <= 5.f) CHECK(kept < pairs / 4);  // and they do skip most bins
+  }
+  // Directions on the cube's edges and corners, and ones that are not finite.
+  for (const Eigen::Vector3f d : {Eigen::Vector3f(1, 1, 0), Eigen::Vector3f(1, 1, 1), Eigen::Vector3f(0, 0, -1), Eigen::Vector3f(-1, 0, 0)}) {
+    const Eigen::Vector3f u = d.normalized();
+    CHECK(Bins::in(Bins::near(u, Bins::cosines(0.01f)), Bins::of(u)));
+    CHECK(Bins::in(Bins::near(u, Bins::cosines(0.01f)), Bins::of(-u)));
+  }
+  CHECK(Bins::of(Eigen::Vector3f(NAN, 0, 1)) == Bins::not_finite);
+  CHECK(Bins::of(Eigen::Vector3f::Zero()) == Bins::not_finite);
+  CHECK(Bins::in(Bins::near(Eigen::Vector3f(0, 0, 1), Bins::cosines(0.01f)), Bins::not_finite));
+  const Bins::Set any = Bins::near(Eigen::Vector3f(NAN, 0, 0), Bins::cosines(0.01f));
+  for (int b = 0; b < Bins::count; ++b) CHECK(Bins::in(any, b));
 }

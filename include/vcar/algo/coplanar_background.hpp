@@ -31,6 +31,7 @@
 // candidate the cells within r_c that its plane's slab meets (the selected grid only when the
 // background one holds a coplanar point).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <span>
@@ -98,6 +99,95 @@ inline bool reaches_edge_on(const PlanePoint& a, const PlanePoint& b, float r, f
   return h * h <= edge_sigma * edge_sigma * (b.A.transpose() * a.n).squaredNorm();
 }
 
+// Directions binned on the cube: 6 faces of k x k cells (a direction's face is its largest
+// component's axis and sign, its cell the other two components over that one), and one bin for
+// directions that are not finite. A bin's directions lie within radius(b) of its centre (the
+// farthest of the cell's corners), so a bin whose centre's line lies farther than alpha +
+// radius from a normal's line holds no normal within alpha of it: R10's background points are
+// kept by bin in each grid cell, and a candidate skips the bins that cannot be coplanar with it.
+struct NormalBins {
+  static constexpr int k = 4, count = 6 * k * k + 1, not_finite = count - 1;
+  using Set = std::array<std::uint64_t, (count + 63) / 64>;
+
+  static int of(const Eigen::Vector3f& n) {
+    if (!n.allFinite()) return not_finite;
+    int a = 0;
+    for (int d = 1; d < 3; ++d)
+      if (std::abs(n[d]) > std::abs(n[a])) a = d;
+    const float m = std::abs(n[a]);
+    if (!(m > 0.f)) return not_finite;
+    auto cell = [&](float t) { return std::clamp(static_cast<int>(std::floor((t / m + 1.f) * 0.5f * k)), 0, k - 1); };
+    const int face = 2 * a + (n[a] < 0.f);
+    return (face * k + cell(n[(a + 2) % 3])) * k + cell(n[(a + 1) % 3]);
+  }
+  // cos(alpha + radius(b)) per bin (0 where that reaches past 90 degrees; -1 for the non-finite
+  // bin): what near() compares with.
+  using Cosines = std::array<float, count>;
+  static Cosines cosines(float alpha) {
+    Cosines c{};
+    const auto& t = table();
+    for (int b = 0; b < count; ++b) {
+      const double reach = alpha + t.radius[static_cast<std::size_t>(b)];
+      c[static_cast<std::size_t>(b)] = b == not_finite ? -1.f : reach >= 1.5707963 ? 0.f : static_cast<float>(std::cos(reach));
+    }
+    return c;
+  }
+  // The bins that may hold a direction within alpha of +-n (c = cosines(alpha)): every bin when n
+  // is not finite, and always the non-finite one.
+  static Set near(const Eigen::Vector3f& n, const Cosines& c) {
+    Set out{};
+    const auto& t = table();
+    const bool finite = n.allFinite();
+    const float norm = finite ? n.norm() : 0.f;
+    for (int b = 0; b < count; ++b) {
+      const std::size_t u = static_cast<std::size_t>(b);
+      if (!finite || c[u] <= 0.f || std::abs(n.dot(t.centre[u])) >= c[u] * norm - 1e-4f)
+        out[u / 64] |= std::uint64_t{1} << (u % 64);
+    }
+    return out;
+  }
+  static Set all() {
+    Set out{};
+    for (int b = 0; b < count; ++b) out[static_cast<std::size_t>(b) / 64] |= std::uint64_t{1} << (b % 64);
+    return out;
+  }
+  static bool in(const Set& s, int b) { return (s[static_cast<std::size_t>(b) / 64] >> (b % 64)) & 1; }
+
+private:
+  struct Table {
+    std::array<Eigen::Vector3f, count> centre;
+    std::array<double, count> radius;
+  };
+  static const Table& table() {
+    static const Table t = [] {
+      Table t{};
+      for (int face = 0; face < 6; ++face)
+        for (int iv = 0; iv < k; ++iv)
+          for (int iu = 0; iu < k; ++iu) {
+            const int a = face / 2;
+            auto direction = [&](double u, double v) {  // face point (u, v) as a unit vector
+              Eigen::Vector3d d;
+              d[a] = face % 2 ? -1.0 : 1.0;
+              d[(a + 1) % 3] = -1.0 + 2.0 * u / k;
+              d[(a + 2) % 3] = -1.0 + 2.0 * v / k;
+              return d.normalized();
+            };
+            const std::size_t b = static_cast<std::size_t>((face * k + iv) * k + iu);
+            const Eigen::Vector3d c = direction(iu + 0.5, iv + 0.5);
+            double r = 0.0;
+            for (int corner = 0; corner < 4; ++corner)
+              r = std::max(r, std::acos(std::clamp(c.dot(direction(iu + corner % 2, iv + corner / 2)), -1.0, 1.0)));
+            t.centre[b] = c.cast<float>();
+            t.radius[b] = r + 1e-3;  // and a margin for rounding
+          }
+      t.centre[not_finite] = Eigen::Vector3f::Zero();
+      t.radius[not_finite] = 4.0;
+      return t;
+    }();
+    return t;
+  }
+};
+
 }  // namespace detail
 
 // Eq. R10 on `selected` (ascending scene indices): the positions k into `selected` whose
@@ -127,7 +217,9 @@ std::vector<std::size_t> coplanar_background(const GaussianScene& scene, std::sp
   };
   auto flat_index = [&](int x, int y, int z) { return (static_cast<std::size_t>(z) * dim + y) * dim + x; };
   struct Grid {
-    std::vector<std::uint32_t> start;
+    std::vector<std::uint32_t> start;      // per cell: its first run
+    std::vector<std::uint32_t> run_begin;  // per run (of one normal bin in one cell): its first point; then the end
+    std::vector<std::uint8_t> run_bin;     // per run: its normal bin (detail::NormalBins)
     std::vector<detail::PlanePoint> points;
     float t_max = 0.f, s_max = 0.f;  // largest thickness, largest scale of its points
   };
@@ -158,22 +250,44 @@ std::vector<std::size_t> coplanar_background(const GaussianScene& scene, std::sp
   auto cell_of = [&](const Eigen::Vector3f& m) { return flat_index(cell_index(m, 0), cell_index(m, 1), cell_index(m, 2)); };
   Grid grid[4];
   for (int g = 0; g < 4; ++g) {
-    grid[g].start.assign(static_cast<std::size_t>(dim) * dim * dim + 1, 0);
-    for (const detail::PlanePoint& q : members[g]) ++grid[g].start[cell_of(q.mu) + 1];
-    for (std::size_t c = 1; c < grid[g].start.size(); ++c) grid[g].start[c] += grid[g].start[c - 1];
+    std::vector<std::uint32_t> first(static_cast<std::size_t>(dim) * dim * dim + 1, 0);  // per cell: first point
+    for (const detail::PlanePoint& q : members[g]) ++first[cell_of(q.mu) + 1];
+    for (std::size_t c = 1; c < first.size(); ++c) first[c] += first[c - 1];
     grid[g].points.resize(members[g].size());
-    std::vector<std::uint32_t> next(grid[g].start.begin(), grid[g].start.end() - 1);
+    std::vector<std::uint32_t> next(first.begin(), first.end() - 1);
     for (const detail::PlanePoint& q : members[g]) {
       grid[g].points[next[cell_of(q.mu)]++] = q;
       grid[g].t_max = std::max(grid[g].t_max, q.t);
       grid[g].s_max = std::max(grid[g].s_max, extent(q));
     }
+    // Within each cell, the points by normal bin (ascending index within a bin), one run per bin.
+    grid[g].start.assign(first.size(), 0);
+    std::vector<std::pair<int, std::uint32_t>> order;
+    std::vector<detail::PlanePoint> sorted;
+    for (std::size_t c = 0; c + 1 < first.size(); ++c) {
+      grid[g].start[c] = static_cast<std::uint32_t>(grid[g].run_bin.size());
+      order.clear();
+      for (std::uint32_t e = first[c]; e < first[c + 1]; ++e) order.push_back({detail::NormalBins::of(grid[g].points[e].n), e});
+      std::sort(order.begin(), order.end());
+      sorted.clear();
+      for (std::size_t e = 0; e < order.size(); ++e) {
+        if (e == 0 || order[e].first != order[e - 1].first) {
+          grid[g].run_begin.push_back(first[c] + static_cast<std::uint32_t>(e));
+          grid[g].run_bin.push_back(static_cast<std::uint8_t>(order[e].first));
+        }
+        sorted.push_back(grid[g].points[order[e].second]);
+      }
+      std::copy(sorted.begin(), sorted.end(), grid[g].points.begin() + first[c]);
+    }
+    grid[g].start.back() = static_cast<std::uint32_t>(grid[g].run_bin.size());
+    grid[g].run_begin.push_back(static_cast<std::uint32_t>(grid[g].points.size()));
   }
   // f(point) for every point of grid g in the cells within r of a (the cell's box nearer than r
   // to mu_a) that meet the slab |n_a . (x - mu_a)| <= w (the cell's box: centre c,
   // |n_a . (x - c)| <= cell / 2 sum_d |n_a,d|; a point of a skipped cell lies farther from mu_a
   // than r or from a's plane than w, by a margin for rounding), until f returns false.
-  auto for_each_near = [&](const Grid& g, const detail::PlanePoint& a, float w, auto&& f) {
+  auto for_each_near = [&](const Grid& g, const detail::PlanePoint& a, float w, const detail::NormalBins::Set& bins,
+                           auto&& f) {
     const int cx = cell_index(a.mu, 0), cy = cell_index(a.mu, 1), cz = cell_index(a.mu, 2);
     const float half = 0.5f * cell * (std::abs(a.n.x()) + std::abs(a.n.y()) + std::abs(a.n.z())) * 1.001f + w;
     const float h0 = a.n.dot(origin - a.mu + Eigen::Vector3f::Constant(0.5f * cell));  // cell (0, 0, 0)'s centre
@@ -194,13 +308,18 @@ std::vector<std::size_t> coplanar_background(const GaussianScene& scene, std::sp
           const float h = h0 + cell * (a.n.x() * static_cast<float>(x) + a.n.y() * static_cast<float>(y) + a.n.z() * static_cast<float>(z));
           if (std::abs(h) > half) continue;
           const std::size_t c = flat_index(x, y, z);
-          for (std::uint32_t e = g.start[c]; e < g.start[c + 1]; ++e)
-            if (!f(g.points[e])) return;
+          for (std::uint32_t run = g.start[c]; run < g.start[c + 1]; ++run) {
+            if (!detail::NormalBins::in(bins, g.run_bin[run])) continue;
+            for (std::uint32_t e = g.run_begin[run]; e < g.run_begin[run + 1]; ++e)
+              if (!f(g.points[e])) return;
+          }
         }
       }
     }
   };
 
+  const detail::NormalBins::Cosines bin_cosines = detail::NormalBins::cosines(p.angle_deg * 3.14159265358979f / 180.f);
+  const detail::NormalBins::Set every_bin = detail::NormalBins::all();
   std::vector<std::uint8_t> drop(selected.size(), 0);
   parallel_for(static_cast<std::int64_t>(selected.size()), [&](std::int64_t kk) {
     const auto k = static_cast<std::size_t>(kk);
@@ -209,16 +328,17 @@ std::vector<std::size_t> coplanar_background(const GaussianScene& scene, std::sp
     const detail::PlanePoint a = detail::plane_point(scene, i, p.min_flatness);
     if (!a.flat) return;
     long B = 0, S = 0;
-    // Coplanar points lie within slab (t_a + t_max) of a's plane, edge-on ones that reach it
-    // within edge_sigma times their largest scale.
+    // Coplanar points lie within slab (t_a + t_max) of a's plane, with a normal in a bin near
+    // a's; edge-on ones reach it within edge_sigma times their largest scale.
+    const detail::NormalBins::Set near = detail::NormalBins::near(a.n, bin_cosines);
     for (int g = 0; g <= 1; ++g)
-      for_each_near(grid[g], a, p.slab * (a.t + grid[g].t_max),
+      for_each_near(grid[g], a, p.slab * (a.t + grid[g].t_max), near,
                     [&](const detail::PlanePoint& q) { return B += detail::coplanar(a, q, r, cos_alpha, p.slab), true; });
     if (B == 0) return;  // no seen background plane: kept, whatever S
     // S is counted only until it reaches B: i is kept from then on (the same verdict, less work).
     for (int g = 2; g <= 3 && S < B; ++g) {
       const float w = std::max(p.slab * (a.t + grid[g].t_max), p.edge_sigma * grid[g].s_max);
-      for_each_near(grid[g], a, w, [&](const detail::PlanePoint& q) {
+      for_each_near(grid[g], a, w, every_bin, [&](const detail::PlanePoint& q) {
         S += detail::coplanar(a, q, r, cos_alpha, p.slab) || detail::reaches_edge_on(a, q, r, p.edge_cos, p.edge_sigma);
         return S < B;
       });
