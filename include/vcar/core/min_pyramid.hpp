@@ -28,13 +28,20 @@ public:
     if (levels_storage_.empty()) levels_storage_.emplace_back();
     std::vector<float>& base = levels_storage_[0];
     base.assign(static_cast<std::size_t>(w) * static_cast<std::size_t>(h), std::numeric_limits<float>::infinity());
-    for (int y = 0; y < height; ++y) {
-      float* cells = base.data() + static_cast<std::size_t>(y / tile) * static_cast<std::size_t>(w);
-      const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(width);
+    row_.resize(static_cast<std::size_t>(w) * tile);
+    std::fill(row_.begin() + width, row_.end(), std::numeric_limits<float>::infinity());  // past the last tile's edge
+    for (int y = 0; y < height; ++y) {  // a row's values (vectorisable), then its tiles' minima
+      const std::size_t at = static_cast<std::size_t>(y) * static_cast<std::size_t>(width);
       for (int x = 0; x < width; ++x) {
-        const float v = value(row + static_cast<std::size_t>(x));
-        float& m = cells[x / tile];
-        m = v == v ? std::min(m, v) : -std::numeric_limits<float>::infinity();
+        const float v = value(at + static_cast<std::size_t>(x));
+        row_[static_cast<std::size_t>(x)] = v == v ? v : -std::numeric_limits<float>::infinity();
+      }
+      float* cells = base.data() + static_cast<std::size_t>(y / tile) * static_cast<std::size_t>(w);
+      for (int tx = 0; tx < w; ++tx) {
+        const float* r = row_.data() + static_cast<std::size_t>(tx) * tile;
+        float m = cells[tx];
+        for (int i = 0; i < tile; ++i) m = std::min(m, r[i]);
+        cells[tx] = m;
       }
     }
     levels_.push_back({w, h});
@@ -78,6 +85,7 @@ private:
   int width_ = 0, height_ = 0;
   std::vector<Size> levels_;                     // cells per level
   std::vector<std::vector<float>> levels_storage_;  // minima per level, row-major
+  std::vector<float> row_;                       // one row's values, padded to whole tiles
 };
 
 }  // namespace vcar
