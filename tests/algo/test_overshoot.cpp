@@ -214,7 +214,11 @@ TEST_CASE("Eq. R11b's quartiles against brute force: a dilated disc erodes, an e
     // The transforms over a window around the mask read the whole image's wherever an edge
     // outside the window could be nearer: the same quartiles for any window.
     for (int window : {0, 1, 2, 3, 5})
-      for (int k = 0; k < 3; ++k) CHECK(vcar::overshoot_quartiles_px(c.m, e, window)[k] == got[k]);
+      for (int k = 0; k < 3; ++k) CHECK(vcar::overshoot_quartiles_px(c.m, e, window, 0)[k] == got[k]);
+    // So does the nearest-first search from each contour pixel, whatever its reach (one too short
+    // for some pixel falls back to the transforms).
+    for (int reach : {1, 2, 3, 5, 16})
+      for (int k = 0; k < 3; ++k) CHECK(vcar::overshoot_quartiles_px(c.m, e, 2, reach)[k] == got[k]);
   }
 }
 

@@ -1,5 +1,8 @@
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <cmath>
+#include <random>
 #include <vector>
 
 #include "vcar/algo/undershoot.hpp"
@@ -33,11 +36,51 @@ TEST_CASE("Eq. R6a by hand: a mask 3 px inside the render undershoots by 3, the 
   // The image border is not a contour: a full mask has none.
   CHECK(vcar::undershoot_px(square_mask(20, 20, 0, 0, 20, 20), alpha) == 0.0);
   // Over a window around the mask too small to hold the render's background (0-3 px: the
-  // background lies 4 px out), the whole image's transform decides: the same values.
-  for (int window : {0, 1, 2, 3, 4}) {
-    CHECK(vcar::undershoot_px(square_mask(20, 20, 8, 8, 12, 12), alpha, window) == 3.0);
-    CHECK(vcar::undershoot_px(square_mask(20, 20, 5, 5, 15, 15), alpha, window) == 0.0);
-    CHECK(vcar::undershoot_px(square_mask(20, 20, 8, 8, 12, 12), square_alpha(20, 0, 20), window) == 0.0);
+  // background lies 4 px out), the whole image's transform decides: the same values. So does a
+  // nearest-first search too short to reach it (reach 0-3), which falls back to the transform.
+  for (int window : {0, 1, 2, 3, 4})
+    for (int reach : {0, 1, 3, 4, 16}) {
+      CAPTURE(window, reach);
+      CHECK(vcar::undershoot_px(square_mask(20, 20, 8, 8, 12, 12), alpha, window, reach) == 3.0);
+      CHECK(vcar::undershoot_px(square_mask(20, 20, 5, 5, 15, 15), alpha, window, reach) == 0.0);
+      CHECK(vcar::undershoot_px(square_mask(20, 20, 8, 8, 12, 12), square_alpha(20, 0, 20), window, reach) == 0.0);
+    }
+}
+
+TEST_CASE("Eq. R6a against brute force on random renders and masks, for any reach of the nearest-first search") {
+  std::mt19937 rng(29);
+  std::uniform_int_distribution<int> c(2, 27), r(2, 9);
+  for (int t = 0; t < 40; ++t) {
+    // A render of two discs and a mask of one disc near them.
+    ImageF alpha(30, 30, 1);
+    Mask m(30, 30, 1);
+    const int ax = c(rng), ay = c(rng), ar = r(rng), bx = c(rng), by = c(rng), br = r(rng), mx = c(rng), my = c(rng), mr = r(rng);
+    for (int y = 0; y < 30; ++y)
+      for (int x = 0; x < 30; ++x) {
+        const std::size_t q = static_cast<std::size_t>(y) * 30 + x;
+        const bool in = (x - ax) * (x - ax) + (y - ay) * (y - ay) <= ar * ar || (x - bx) * (x - bx) + (y - by) * (y - by) <= br * br;
+        alpha.data[q] = in ? 0.8f : 0.1f;
+        m.data[q] = (x - mx) * (x - mx) + (y - my) * (y - my) <= mr * mr ? 255 : 0;
+      }
+    // Brute force: each contour pixel's distance to the nearest background pixel; the upper median.
+    std::vector<double> e;
+    for (int y = 0; y < 30; ++y)
+      for (int x = 0; x < 30; ++x) {
+        auto fg = [&](int u, int v) { return m.data[static_cast<std::size_t>(v) * 30 + u] != 0; };
+        if (!fg(x, y) || !((x > 0 && !fg(x - 1, y)) || (x < 29 && !fg(x + 1, y)) || (y > 0 && !fg(x, y - 1)) || (y < 29 && !fg(x, y + 1)))) continue;
+        double d = INFINITY;
+        for (int v = 0; v < 30; ++v)
+          for (int u = 0; u < 30; ++u)
+            if (!(alpha.data[static_cast<std::size_t>(v) * 30 + u] >= 0.5f)) d = std::min(d, std::hypot(u - x, v - y));
+        e.push_back(std::max(0.0, d - 1.0));
+      }
+    std::sort(e.begin(), e.end());
+    const double want = e.empty() ? 0.0 : e[e.size() / 2];
+    for (int reach : {0, 1, 2, 4, 16}) {
+      CAPTURE(t, reach);
+      CHECK(vcar::undershoot_px(m, alpha, vcar::undershoot_window_px, reach) == Approx(want).margin(1e-12));
+      CHECK(vcar::undershoot_px(m, alpha, 1, reach) == Approx(want).margin(1e-12));
+    }
   }
 }
 

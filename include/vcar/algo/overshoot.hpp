@@ -49,6 +49,7 @@
 #include "vcar/core/distance_transform.hpp"
 #include "vcar/core/image.hpp"
 #include "vcar/core/mask_contour.hpp"
+#include "vcar/core/nearest_pixels.hpp"
 #include "vcar/core/pixel_box.hpp"
 
 namespace vcar {
@@ -97,14 +98,55 @@ inline std::vector<std::uint8_t> occlusion_edges(const ImageF& alpha, const Imag
 
 // Eq. R11b: the quartiles {q1_j, o_j, q3_j} of s(c) over mask m's contour (px; > 0: outside the
 // render's occlusion edges `edge`, Eq. R11a), o_j the overshoot. {0, 0, 0} when no contour pixel
-// has a value (no contour, no edge). The two distance transforms run over the mask's bounding box
-// grown by `window` px; a contour pixel whose nearer side is not certain from the box (an edge
-// outside it could be nearer) reads both transforms of the whole image instead, so the result is
-// the whole image's for any window.
+// has a value (no contour, no edge). First each contour pixel looks for the nearest edge pixel
+// within `reach` px, nearest first (NearestPixels; an edge pixel in the mask wins a tie, as
+// below): when the quartiles are certain from the values found (below), they are the result.
+// Otherwise the two distance
+// transforms run over the mask's bounding box grown by `window` px; a contour pixel whose nearer
+// side is not certain from the box (an edge outside it could be nearer) reads both transforms of
+// the whole image instead. Either way the result is the whole image's transforms', for any
+// reach and window.
 inline constexpr int overshoot_window_px = 48;
 inline std::array<double, 3> overshoot_quartiles_px(const Mask& m, const std::vector<std::uint8_t>& edge,
-                                                    int window = overshoot_window_px) {
+                                                    int window = overshoot_window_px, int reach = contour_reach_px) {
   const int W = m.width, H = m.height;
+  if (reach > 0) {
+    const NearestPixels& near = nearest_pixels(reach);
+    std::vector<std::size_t> contour;
+    for_each_contour_pixel(m, [&](std::size_t q) { contour.push_back(q); });
+    std::vector<double> s;
+    std::size_t far = 0;  // contour pixels with no edge pixel within the reach
+    for (const std::size_t q : contour) {
+      if (4 * far > contour.size()) break;  // more than a quarter: the quartiles cannot be certain
+      const int x = static_cast<int>(q % static_cast<std::size_t>(W)), y = static_cast<int>(q / static_cast<std::size_t>(W));
+      int nearest = -1;  // d2 of the nearest edge pixel
+      bool inside = false;  // one of that distance lies in the mask
+      near.visit(x, y, W, H, [&](std::size_t r, int d2) {
+        if (nearest >= 0 && d2 > nearest) return false;
+        if (edge[r]) nearest = d2, inside = inside || m.data[r] != 0;
+        return true;
+      });
+      if (nearest < 0) ++far;
+      else s.push_back(inside ? std::sqrt(double(nearest)) : -std::sqrt(double(nearest)));
+    }
+    // A pixel that found none has |s(c)| > reach, on either side: with a of them negative, the
+    // sorted values are those a, then the found ones, then the rest, and the quartile at i is
+    // found[i - a]. It is certain, whatever a in [0, far], when found[i - far .. i] are one value
+    // (distances on the pixel grid repeat). Some edge pixel exists when something was found, so
+    // every contour pixel has a value.
+    std::sort(s.begin(), s.end());
+    const std::size_t n = contour.size();
+    if (s.size() + far < n) far = n - s.size();  // stopped early: the rest count as far (not certain)
+    std::array<double, 3> out{};
+    bool certain = !s.empty();
+    for (int k = 0; k < 3 && certain; ++k) {
+      const std::size_t i = (k == 0 ? n / 4 : k == 1 ? n / 2 : 3 * n / 4);
+      certain = i >= far && i < s.size() && s[i - far] == s[i];
+      if (certain) out[static_cast<std::size_t>(k)] = s[i];
+    }
+    if (certain) return out;
+    if (n == 0) return {0.0, 0.0, 0.0};  // no contour
+  }
   const PixelBox b = foreground_box(m, std::max(window, 0));
   if (b.width() <= 0) return {0.0, 0.0, 0.0};  // no foreground, no contour
   auto seeds = [&](bool inside) {

@@ -36,19 +36,44 @@
 #include "vcar/core/distance_transform.hpp"
 #include "vcar/core/image.hpp"
 #include "vcar/core/mask_contour.hpp"
+#include "vcar/core/nearest_pixels.hpp"
 #include "vcar/core/pixel_box.hpp"
 
 namespace vcar {
 
 // Eq. R6a: the undershoot e_j of mask m against the render alpha (same size, one channel), px.
-// 0 when the mask has no contour or the render no background. The distance transform runs over
-// the mask's bounding box grown by `window` px; a contour pixel farther from the render's
-// background in the box than from the box's outside (the background there could be nearer) reads
-// the whole image's transform instead, so the result is the whole image's for any window.
+// 0 when the mask has no contour or the render no background. First each contour pixel looks
+// for the render's background within `reach` px, nearest first (NearestPixels): when more than
+// half of them find it, the median is theirs (the others' values are larger). Otherwise the
+// distance transform runs over the mask's bounding box grown by `window` px; a contour pixel
+// farther from the render's background in the box than from the box's outside (the background
+// there could be nearer) reads the whole image's transform instead. Either way the result is
+// the whole image's transform's, for any reach and window.
 inline constexpr int undershoot_window_px = 48;
-inline double undershoot_px(const Mask& m, const ImageF& alpha, int window = undershoot_window_px) {
+inline double undershoot_px(const Mask& m, const ImageF& alpha, int window = undershoot_window_px,
+                            int reach = contour_reach_px) {
   const int W = m.width, H = m.height;
   auto background = [&](int x, int y) { return !(alpha.data[static_cast<std::size_t>(y) * W + x] >= 0.5f); };
+  auto value = [](double d2) { return std::isfinite(d2) ? std::max(0.0, std::sqrt(d2) - 1.0) : std::numeric_limits<double>::quiet_NaN(); };
+  if (reach > 0 && std::any_of(alpha.data.begin(), alpha.data.end(), [](float a) { return !(a >= 0.5f); })) {
+    const NearestPixels& near = nearest_pixels(reach);
+    std::vector<double> found;
+    std::size_t contour = 0;
+    for_each_contour_pixel(m, [&](std::size_t q) {
+      ++contour;
+      const int x = static_cast<int>(q % static_cast<std::size_t>(W)), y = static_cast<int>(q / static_cast<std::size_t>(W));
+      const int d2 = nearest_squared_distance(near, x, y, W, H, [&](std::size_t r) { return !(alpha.data[r] >= 0.5f); });
+      if (d2 >= 0) found.push_back(value(d2));
+    });
+    if (contour == 0) return 0.0;
+    // Every value found is at most reach - 1, every other one larger: the median (the upper one
+    // of an even count, contour_quartiles) is the found values' when it falls among them.
+    const std::size_t mid = contour / 2;
+    if (mid < found.size()) {
+      std::nth_element(found.begin(), found.begin() + static_cast<std::ptrdiff_t>(mid), found.end());
+      return found[mid];
+    }
+  }
   const PixelBox b = foreground_box(m, std::max(window, 0));
   if (b.width() <= 0) return 0.0;  // no foreground, no contour
   const std::vector<double> box = squared_distance_in(b, background);
@@ -61,7 +86,7 @@ inline double undershoot_px(const Mask& m, const ImageF& alpha, int window = und
       if (whole.empty()) whole = squared_distance_in(PixelBox{0, 0, W, H}, background);
       d2 = whole[q];
     }
-    return std::isfinite(d2) ? std::max(0.0, std::sqrt(d2) - 1.0) : std::numeric_limits<double>::quiet_NaN();
+    return value(d2);
   });
 }
 
