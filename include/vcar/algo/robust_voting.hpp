@@ -121,10 +121,7 @@ public:
       v.D = expected_depth->data.data();
       v.A = alpha->data.data();
       v.scale = 1.f + tolerance;
-      // Eq. R3's bound per pixel, exactly as the per-mean test computes it; no surface: +inf.
-      surface_.build(camera.width, camera.height, [&](std::size_t p) {
-        return v.A[p] >= 0.5f ? v.D[p] / v.A[p] * v.scale : std::numeric_limits<float>::infinity();
-      });
+      surface_.build(camera.width, camera.height, [&](std::size_t p) { return v.bound(p); });
     }
     v.P = detail::MeanProjection::from(camera);
     const detail::ViewLanes lanes = detail::ViewLanes::of(v.P);
@@ -202,6 +199,8 @@ private:
     const std::uint8_t* sure = nullptr;  // Eq. R6b's sure plane (null: every pixel is sure)
     const float *D = nullptr, *A = nullptr;  // Eq. R3's render
     float scale = 1.f;                   // 1 + tolerance
+    // Eq. R3: the greatest depth at pixel p not behind the rendered surface (+inf: no surface).
+    float bound(std::size_t p) const { return A[p] >= 0.5f ? D[p] / A[p] * scale : std::numeric_limits<float>::infinity(); }
   };
 
   bool sure_level() const noexcept { return o_.gamma > 0.f; }
@@ -249,7 +248,7 @@ private:
         const std::size_t j = i0 + l, p = static_cast<std::size_t>(pix[l]);
         const std::uint16_t f = v.M[p] != 0;
         ++c_[0][j]; c_[1][j] = static_cast<std::uint16_t>(c_[1][j] + f);                    // Eq. 2
-        if (v.D && v.A[p] >= 0.5f && !(depth[l] <= v.D[p] / v.A[p] * v.scale)) continue;     // Eq. R3
+        if (v.D && !(depth[l] <= v.bound(p))) continue;                                      // Eq. R3
         ++c_[2][j]; c_[3][j] = static_cast<std::uint16_t>(c_[3][j] + f);
         if (o_.reliability) rel_.see(j, f != 0);                                            // Eq. R13
         if (!sure_counts || (v.sure && !v.sure[p])) continue;                                // Eq. R6b
