@@ -290,7 +290,7 @@ TEST_CASE("Eq. R10's normal bins: a normal within alpha of a candidate's (either
     if (alpha_deg <= 5.f) CHECK(kept < pairs / 4);  // and they do skip most bins
   }
   // Directions on the cube's edges and corners, and ones that are not finite.
-  for (const Eigen::Vector3f d : {Eigen::Vector3f(1, 1, 0), Eigen::Vector3f(1, 1, 1), Eigen::Vector3f(0, 0, -1), Eigen::Vector3f(-1, 0, 0)}) {
+  for (const Eigen::Vector3f& d : {Eigen::Vector3f(1, 1, 0), Eigen::Vector3f(1, 1, 1), Eigen::Vector3f(0, 0, -1), Eigen::Vector3f(-1, 0, 0)}) {
     const Eigen::Vector3f u = d.normalized();
     CHECK(Bins::in(Bins::near(u, Bins::cosines(0.01f)), Bins::of(u)));
     CHECK(Bins::in(Bins::near(u, Bins::cosines(0.01f)), Bins::of(-u)));

@@ -80,6 +80,8 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
   CHECK(r.abr_lowpass);  // as the paper; R8 reads own footprints after a split vote
   CHECK(r.snap.enabled);                  // R11-R12
   CHECK(r.evidence.kappa == 2.f);
+  CHECK(r.phi_s_deg == VcarParams::reference_code().phi_e_deg);  // the spiral from the code's lowest elevation
+  CHECK(r.phi_e_deg == VcarParams::nvos().phi_e_deg);
   CHECK(r.robust_vote());
   CHECK_NOTHROW(r.validate());
   for (const auto& p : {VcarParams::nvos(), VcarParams::lerf(), VcarParams::reference_code()}) {

@@ -386,6 +386,7 @@ TEST_CASE("Eq. R8: ABR reads the training masks widened by their undershoot only
   prompt.reference_view = 4;
   auto p = vcar::VcarParams::robust();
   p.force_fine_round = true;
+  p.phi_s_deg = vcar::VcarParams::nvos().phi_s_deg;  // the rim's ratios below are those of the paper's spiral
   auto run = [&](int px) {
     erode = px;
     return vcar::segment(w.scene, cams, prompt, renderer, seg, p).diagnostics;

@@ -169,8 +169,10 @@ struct VcarParams {
   // split, on their own footprints (R8), hidden candidates on a seen background plane dropped
   // (R10), each mask snapped to the render's occlusion edges where three quarters of its contour
   // agree: eroded where it reaches 1 px or more past them (R11), grown to them where it stops
-  // short (R12), and each view weighted by how its mask agrees with the round's consensus (R13).
-  // What vcar::segment uses when given no parameters. Chosen on the field's tuning seed and the
+  // short (R12), and each view weighted by how its mask agrees with the round's consensus (R13);
+  // the spiral's elevations from -10 degrees, the released code's lowest, not the paper's -60
+  // (below the floor the piece of it in G_coarse hides the object's underside from the
+  // segmenter: docs/notes/field-spiral-2026-12-04.md). What vcar::segment uses when given no parameters. Chosen on the field's tuning seed and the
   // synthetic suite (docs/notes/default-2026-12-02.md; R6d on ISNet's guitar, the snap's
   // conditions on SAM-like drift, docs/notes/default-2026-12-03.md): 0.7 where masks undershoot
   // (0.5 let GrabCut's leaks through, 0.8 lost eroded masks' rims), the paper's 0.8 where they do not
@@ -178,6 +180,7 @@ struct VcarParams {
   // every preset, or never better on the field; docs/robust.md, appendix.)
   static VcarParams robust() {
     VcarParams p;
+    p.phi_s_deg = -10.f;  // Eq. 7's first elevation: the released code's lowest
     p.evidence.occlusion = true;
     p.undershoot.band = 1.5f;
     p.undershoot.tau = 0.7f;
