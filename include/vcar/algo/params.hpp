@@ -172,8 +172,9 @@ struct VcarParams {
   // short (R12), and each view weighted by how its mask agrees with the round's consensus (R13);
   // the spiral's elevations from -10 degrees, the released code's lowest, not the paper's -60
   // (below the floor the piece of it in G_coarse hides the object's underside from the
-  // segmenter: docs/notes/field-spiral-2026-12-04.md). What vcar::segment uses when given no parameters. Chosen on the field's tuning seed and the
-  // synthetic suite (docs/notes/default-2026-12-02.md; R6d on ISNet's guitar, the snap's
+  // segmenter: docs/notes/field-spiral-2026-12-04.md). What vcar::segment uses when given no
+  // parameters. Chosen on the field's tuning seed and the synthetic suite
+  // (docs/notes/default-2026-12-02.md; R6d on ISNet's guitar, the snap's
   // conditions on SAM-like drift, docs/notes/default-2026-12-03.md): 0.7 where masks undershoot
   // (0.5 let GrabCut's leaks through, 0.8 lost eroded masks' rims), the paper's 0.8 where they do not
   // (ISNet's floor patches), R13 on (SAM-like drift). (R1, R4, R5 and R9 were removed: inert in
