@@ -176,9 +176,10 @@ struct VcarParams {
   // parameters. Chosen on the field's tuning seed and the synthetic suite
   // (docs/notes/default-2026-12-02.md; R6d on ISNet's guitar, the snap's
   // conditions on SAM-like drift, docs/notes/default-2026-12-03.md): 0.7 where masks undershoot
-  // (0.5 let GrabCut's leaks through, 0.8 lost eroded masks' rims), the paper's 0.8 where they do not
-  // (ISNet's floor patches), R13 on (SAM-like drift). (R1, R4, R5 and R9 were removed: inert in
-  // every preset, or never better on the field; docs/robust.md, appendix.)
+  // (0.5 let GrabCut's leaks through, 0.8 lost eroded masks' rims), the paper's 0.8 where they
+  // do not (ISNet's guitar, whose masks take in a neighbour's piece), R13 on (SAM-like drift).
+  // (R1, R4, R5 and R9 were removed: inert in every preset, or never better on the field;
+  // docs/robust.md, appendix.)
   static VcarParams robust() {
     VcarParams p;
     p.phi_s_deg = -10.f;  // Eq. 7's first elevation: the released code's lowest
