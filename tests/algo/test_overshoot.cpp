@@ -153,6 +153,28 @@ TEST_CASE("Eq. R11c and R12's condition by hand: the snap's direction from the c
   CHECK(vcar::snap_direction({-0.5, 0.5, 2.0}) == SnapDirection::none);
 }
 
+TEST_CASE("Eq. R11c's constants by hand: o_min and m scale with the image diagonal, floored at 1 and 1.5 px") {
+  // 160 x 120: diagonal 200 px, 0.005 and 0.0075 of it are the floors, 1 and 1.5 px.
+  const vcar::OvershootScale s160 = vcar::OvershootScale::of(160, 120);
+  CHECK(s160.min == Approx(1.0));
+  CHECK(s160.margin == Approx(1.5));
+  // 640 x 480: diagonal 800 px: 4 and 6 px.
+  const vcar::OvershootScale s640 = vcar::OvershootScale::of(640, 480);
+  CHECK(s640.min == Approx(4.0));
+  CHECK(s640.margin == Approx(6.0));
+  // 64 x 48 (diagonal 80): the floors.
+  const vcar::OvershootScale s64 = vcar::OvershootScale::of(64, 48);
+  CHECK(s64.min == 1.0);
+  CHECK(s64.margin == 1.5);
+  // A contour 2 px past the edges overshoots at 160 x 120, not at 640 x 480, where it is a
+  // segmenter's contour on the render's edge to within its resolution; R12's 1 px is the same.
+  using vcar::SnapDirection;
+  CHECK(vcar::snap_direction({2.0, 2.0, 2.5}, s160.min) == SnapDirection::erode);
+  CHECK(vcar::snap_direction({2.0, 2.0, 2.5}, s640.min) == SnapDirection::none);
+  CHECK(vcar::snap_direction({4.0, 5.0, 6.0}, s640.min) == SnapDirection::erode);
+  CHECK(vcar::snap_direction({-1.0, 0.0, 0.5}, s640.min) == SnapDirection::grow);
+}
+
 TEST_CASE("Eq. R11b's quartiles against brute force: a dilated disc erodes, an eroded one grows, a shifted one neither") {
   // A disc of radius 7 at (11, 11), depth 1, before a wall at depth 3, in a 24 x 24 render.
   const int N = 24;

@@ -17,9 +17,9 @@
 // A pixel lies in the gap between the mask and an occlusion edge when a path from the mask
 // through it reaches the edge within the reach r_j:
 //   M'_j = M_j  union  {p : a_j(p) + b_j(p) <= r_j}                                   (Eq. R12b)
-//   r_j  = min(-o_j + m_g, g |diag|, sqrt(|M_j| / pi))     where q3_j < o_min (Eq. R11b) (Eq. R12c)
-// (m_g = 1 px, grow_margin_px; g = 0.1 of the image diagonal, grow_max_diagonal; o_min = 1 px,
-// overshoot_min_px: a mask that R11 erodes does not grow). Where the object touches the table the
+//   r_j  = min(-o_j + m_g, g |diag|, sqrt(|M_j| / pi))     where q3_j < 1 px (Eq. R11b) (Eq. R12c)
+// (m_g = 1 px, grow_margin_px; g = 0.1 of the image diagonal, grow_max_diagonal; 1 px,
+// overshoot_min_px, the floor of R11's o_min: a mask that R11 erodes does not grow). Where the object touches the table the
 // surface is continuous but no occlusion edge lies beyond the contact, so b_j stays above the
 // reach there and the table is not taken; the far side of a depth step is never reached. The
 // last term keeps a mask of a part (a handle prompted inside a mug's silhouette) from growing

@@ -27,13 +27,18 @@
 // the render's edge lies outside the true silhouette by the splats' own extent, measured 1-5 px
 // at 160 x 120 and 7-10 px at 640 x 480 (median over a round's views); a mask eroded by e px
 // reads about e less; a segmenter that follows the render's own edges (the frames are renders)
-// reads 0. A mask dilated by d reads about d minus the extent. So a contour at least o_min px
+// reads 0. A mask dilated by d reads about d minus the extent. So a contour at least o_min
 // outside the render's edge overshoots, and the mask is eroded:
 //   M'_j = {p in M_j : d(p, not M_j) > o_j + m}   where o_j >= o_min, q1_j >= 0    (Eq. R11c)
 // (q1_j, q3_j the lower and upper quartiles of s(c): erosion asks three quarters of the contour
-// on or outside the edges, R12's growth three quarters less than o_min outside; snap_direction)
-// (o_min = 1 px, m = 1.5 px: part of the splats' extent that the dilated contour also holds;
-// overshoot_min_px and overshoot_margin_px below). Measured o_j per view (forward, orbit, sparse
+// on or outside the edges, R12's growth three quarters less than 1 px outside; snap_direction)
+// o_min and m scale with the view: o_min = max(1 px, 0.005 |diag|), m = max(1.5 px, 0.0075
+// |diag|), |diag| the image diagonal in px (1 and 1.5 px at 160 x 120, where they were chosen; 4
+// and 6 px at 640 x 480; m: part of the splats' extent that the dilated contour also holds, and
+// that extent grows with the resolution; the floors: the contour's own grid). In pixels at every
+// size (until 2026-12-05) they read a real segmenter's contour, a pixel or two off the render's
+// edge at 640 x 480, as an overshoot and cut 1.5 px into the object's fringe (ISNet's donut,
+// docs/notes/field-isnet-donut-2026-12-05.md). Measured o_j per view (forward, orbit, sparse
 // and hemisphere rigs, 3 seeds, 160 x 120, the coarse round's renders of the scene): clean masks
 // median -1 to -5.4, dilated by 2 px 0 to 1, by 4 px 1.4 to 2.8. Per view: three exact distance
 // transforms, two to measure (over the mask's bounding box grown by 48 px, the whole image's only
@@ -54,12 +59,24 @@
 
 namespace vcar {
 
-// Eq. R11c's constants, in pixels of the view: the contour is measured on the pixel grid (a
-// distance between pixel centres, to within a pixel), so these are the grid's units, not the
-// object's. They were fields (overshoot_min, overshoot_margin) until 2026-12-03; R11 and R12
-// now share one switch, VcarParams::snap (docs/robust.md).
-inline constexpr double overshoot_min_px = 1.0;     // o_min: a contour this far past the edges overshoots
-inline constexpr double overshoot_margin_px = 1.5;  // m: eroded by o_j + m
+// Eq. R11c's constants (see the top of the file): fractions of the image diagonal, floored at
+// the pixel grid's own resolution (the contour is measured to within a pixel). They were fields
+// (overshoot_min, overshoot_margin) until 2026-12-03, in pixels until 2026-12-05; R11 and R12
+// share one switch, VcarParams::snap (docs/robust.md). overshoot_min_px is also R12c's threshold.
+inline constexpr double overshoot_min_px = 1.0;          // o_min's floor
+inline constexpr double overshoot_min_diagonal = 0.005;  // o_min: this far past the edges overshoots
+inline constexpr double overshoot_margin_px = 1.5;       // m's floor
+inline constexpr double overshoot_margin_diagonal = 0.0075;  // m: eroded by o_j + m
+
+// Eq. R11c's o_min and m for a W x H view (px).
+struct OvershootScale {
+  double min = overshoot_min_px, margin = overshoot_margin_px;
+  static OvershootScale of(int width, int height) {
+    const double diagonal = std::hypot(static_cast<double>(width), static_cast<double>(height));
+    return {std::max(overshoot_min_px, overshoot_min_diagonal * diagonal),
+            std::max(overshoot_margin_px, overshoot_margin_diagonal * diagonal)};
+  }
+};
 
 // Eq. R11a at pixel (x, y) of the render (alpha, expected depth sum z alpha T): the near side
 // of an occlusion edge with relative depth step delta.
@@ -192,14 +209,15 @@ inline double overshoot_px(const Mask& m, const ImageF& alpha, const ImageF& dep
 }
 
 // Eq. R11c and R12's condition: which way the snap moves a mask whose contour reads the
-// quartiles q = {q1_j, o_j, q3_j} (Eq. R11b). Inwards (erode) when it overshoots, o_j >= o_min,
-// and three quarters of the contour lie on or outside the edges, q1_j >= 0; outwards (grow) when
-// three quarters lie less than o_min outside them, q3_j < o_min; otherwise not at all: a contour
+// quartiles q = {q1_j, o_j, q3_j} (Eq. R11b). Inwards (erode) when it overshoots, o_j >= o_min
+// (OvershootScale::min of the view; 1 px by default), and three quarters of the contour lie on
+// or outside the edges, q1_j >= 0; outwards (grow) when three quarters lie less than 1 px outside
+// them, q3_j < 1 px (the grid's unit at any size); otherwise not at all: a contour
 // on both sides of the edges (a mask shifted off the object, the SAM-like drift) is no
 // overshoot to erode and no gap to fill.
 enum class SnapDirection { none, erode, grow };
-inline SnapDirection snap_direction(const std::array<double, 3>& q) {
-  if (q[1] >= overshoot_min_px && q[0] >= 0.0) return SnapDirection::erode;  // Eq. R11c
+inline SnapDirection snap_direction(const std::array<double, 3>& q, double o_min = overshoot_min_px) {
+  if (q[1] >= o_min && q[0] >= 0.0) return SnapDirection::erode;             // Eq. R11c
   if (q[2] < overshoot_min_px) return SnapDirection::grow;                    // Eq. R12c
   return SnapDirection::none;
 }

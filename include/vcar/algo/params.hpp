@@ -116,9 +116,11 @@ struct VcarParams {
   // Eq. R11-R12, the signed snap of each mask to the occlusion edges of the view's render (depth
   // steps over depth_tolerance; the render is asked for depth), one estimate and one switch: o_j,
   // the contour's median signed distance outside those edges, and its quartiles q1_j, q3_j
-  // (Eq. R11b). R11: o_j >= 1 px and q1_j >= 0, the mask is eroded by o_j + 1.5 px before it is
+  // (Eq. R11b). R11: o_j >= o_min and q1_j >= 0, the mask is eroded by o_j + m before it is
   // voted and kept for ABR: in the coarse round, and in the fine round once the coarse round
-  // eroded a mask. R12: q3_j < 1 px (coarse round), the mask grows by the covered,
+  // eroded a mask (o_min = max(1 px, 0.005 |diag|), m = max(1.5 px, 0.0075 |diag|), |diag| the
+  // image diagonal: 1 and 1.5 px at 160 x 120, 4 and 6 px at 640 x 480). R12: q3_j < 1 px
+  // (coarse round), the mask grows by the covered,
   // depth-continuous pixels between its contour and the edges, by at most min(-o_j + 1 px,
   // 0.1 |image diagonal|, r_M), r_M = sqrt(|M| / pi) the mask's radius. A contour on both sides
   // of the edges (a mask shifted off the object) is left as it is.

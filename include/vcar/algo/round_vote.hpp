@@ -142,10 +142,11 @@ inline const Mask* edit_mask(const Mask& m, const RenderOutput& render, bool ove
   const std::vector<std::uint8_t> edges = occlusion_edges(render.alpha, render.depth, params.depth_tolerance);  // Eq. R11a
   const std::array<double, 3> q = overshoot_quartiles_px(m, edges);  // Eq. R11b
   const double o = q[1];
-  const SnapDirection dir = snap_direction(q);
+  const OvershootScale scale = OvershootScale::of(m.width, m.height);
+  const SnapDirection dir = snap_direction(q, scale.min);
   if (overshoot && dir == SnapDirection::erode) {
     scratch = m;
-    erode_by_overshoot(scratch, o + overshoot_margin_px);  // Eq. R11c
+    erode_by_overshoot(scratch, o + scale.margin);  // Eq. R11c
     if (4 * foreground(scratch) < foreground(m)) return &m;  // thin or scattered masks are kept as they are
     edit = MaskEdit::eroded;
     return &scratch;
