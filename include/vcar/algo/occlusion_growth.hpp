@@ -19,12 +19,12 @@
 //   M'_j = M_j  union  {p : a_j(p) + b_j(p) <= r_j}                                   (Eq. R12b)
 //   r_j  = min(-o_j + m_g, g |diag|, sqrt(|M_j| / pi))     where q3_j < 1 px (Eq. R11b) (Eq. R12c)
 // (m_g = 1 px, grow_margin_px; g = 0.1 of the image diagonal, grow_max_diagonal; 1 px,
-// overshoot_min_px, the floor of R11's o_min: a mask that R11 erodes does not grow). Where the object touches the table the
-// surface is continuous but no occlusion edge lies beyond the contact, so b_j stays above the
-// reach there and the table is not taken; the far side of a depth step is never reached. The
-// last term keeps a mask of a part (a handle prompted inside a mug's silhouette) from growing
-// into the whole: its contour moves by at most the mask's own radius. Two breadth-first
-// searches of at most r_j steps each, over the pixels they reach.
+// overshoot_min_px, the floor of R11's o_min: a mask that R11 erodes does not grow). Where the
+// object touches the table the surface is continuous but no occlusion edge lies beyond the
+// contact, so b_j stays above the reach there and the table is not taken; the far side of a
+// depth step is never reached. The last term keeps a mask of a part (a handle prompted inside a
+// mug's silhouette) from growing into the whole: its contour moves by at most the mask's own
+// radius. Two breadth-first searches of at most r_j steps each, over the pixels they reach.
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
