@@ -64,3 +64,49 @@ TEST_CASE("Eq. R7 in the fine round: a decisive vote takes tau_strict, a split o
     CHECK_FALSE(v.split);
   }
 }
+
+TEST_CASE("Eq. R7 by hand: in a decisive vote tau_strict is for the candidates seen in a fifth of their views") {
+  // The ten Gaussians of fine_selection (nine at R = 1, the tenth inside 6 of 10 masks), now
+  // with a render whose surface (depth 0.5, alpha 1) lies in front of the tenth, at pixel
+  // (1, 10), in every view from `hidden_from` on: V_9 = 10, V^o_9 = hidden_from, F^o_9 =
+  // min(hidden_from, 6). Eq. R2 (kappa 2): R_9 = (F^o + 2 * 0.6) / (V^o + 2).
+  std::vector<Eigen::Vector3f> mus;
+  for (int k = 0; k < 9; ++k) mus.push_back({-0.25f + 0.05f * static_cast<float>(k), 0.05f, 1.f});
+  mus.push_back({-0.85f, 0.05f, 1.f});
+  const vcar::GaussianScene scene = scene_of(mus);
+  std::vector<Index> all(10);
+  for (Index i = 0; i < 10; ++i) all[i] = i;
+  const vcar::Mask whole = square_mask(20, 20, 0, 0, 20, 20), inner = square_mask(20, 20, 5, 5, 15, 15);
+  const vcar::Camera c = cam20();
+  vcar::RenderOutput open, front;
+  open.alpha = vcar::ImageF(20, 20, 1);  // no surface anywhere: every Gaussian unoccluded
+  open.depth = vcar::ImageF(20, 20, 1);
+  front = open;
+  front.alpha.data[10 * 20 + 1] = 1.f;
+  front.depth.data[10 * 20 + 1] = 0.5f;
+  vcar::VcarParams p = vcar::VcarParams::robust();
+  p.tau_fine = 0.5f;
+  p.strict.tau = 0.85f;
+  REQUIRE(vcar::seen_fraction == 0.2f);
+  auto run = [&](int hidden_from, vcar::detail::FineVerdict& verdict) {
+    vcar::detail::RoundVote fine(scene, &all, p, true);
+    for (int v = 0; v < 10; ++v) fine.add_view(c, v < 6 ? &whole : &inner, v < hidden_from ? &open : &front, p.depth_tolerance);
+    std::vector<Index> idx;
+    std::vector<float> scores;
+    verdict = fine.selected(p.tau_fine, p.strict.tau, vcar::split_fraction, idx, scores);
+    return idx;
+  };
+  const std::vector<Index> nine{0, 1, 2, 3, 4, 5, 6, 7, 8};
+  std::vector<Index> ten = nine;
+  ten.push_back(9);
+  vcar::detail::FineVerdict v;
+  CHECK(run(10, v) == nine);  // seen in every view: R_9 = 0.6 < tau_strict (as without a render)
+  CHECK(v.tau == 0.85f);
+  CHECK_FALSE(v.split);
+  CHECK(run(2, v) == nine);   // V^o = 2 = 0.2 V: seen; R_9 = (2 + 1.2) / 4 = 0.8 < 0.85
+  CHECK(v.tau == 0.85f);
+  CHECK(run(1, v) == ten);    // V^o = 1 < 0.2 V: hidden; R_9 = (1 + 1.2) / 3 = 0.73 >= tau_fine
+  CHECK(v.tau == 0.85f);
+  CHECK_FALSE(v.split);
+  CHECK(run(0, v) == ten);    // V^o = 0: R_9 = 0.6 (the plain level) >= tau_fine
+}

@@ -180,15 +180,18 @@ public:
   bool kept(std::size_t k, float tau, bool undershoot = true) const { return ratio(k, undershoot) >= tau; }
   // Scene indices (ascending) of the kept candidates, and their R_i (undershoot as in ratio()).
   void selected(float tau, std::vector<Index>& indices, std::vector<float>& scores, bool undershoot = true) const {
-    std::vector<std::pair<Index, float>> out;
-    for (std::size_t j = 0; j < n_; ++j) {
-      const float R = ratio_at(j, undershoot);
-      if (R >= tau) out.push_back({candidate(means_.order[j]), R});
-    }
-    std::sort(out.begin(), out.end());
-    indices.clear();
-    scores.clear();
-    for (const auto& [i, r] : out) { indices.push_back(i); scores.push_back(r); }
+    collect(indices, scores, [&](std::size_t j) { return std::pair{ratio_at(j, undershoot), tau}; });
+  }
+  // Eq. R7 per candidate (decisive_threshold.hpp): tau_strict, on R_i read as ratio(k,
+  // strict_undershoot), for a candidate seen unoccluded in at least a fraction `seen` of the
+  // views that voted on it (V^o_i >= seen V_i); tau, on R_i with R6, for the others.
+  void selected(float tau, float tau_strict, float seen, bool strict_undershoot, std::vector<Index>& indices,
+                std::vector<float>& scores) const {
+    collect(indices, scores, [&](std::size_t j) {
+      return static_cast<float>(c_[2][j]) >= seen * static_cast<float>(c_[0][j])
+                 ? std::pair{ratio_at(j, strict_undershoot), tau_strict}
+                 : std::pair{ratio_at(j, true), tau};
+    });
   }
 
 private:
@@ -256,6 +259,21 @@ private:
       }
     }
     return false;
+  }
+
+  // The candidates whose (R_i, threshold) = rule(sorted position) has R_i >= threshold: scene
+  // indices ascending, and their R_i.
+  template <class Rule>
+  void collect(std::vector<Index>& indices, std::vector<float>& scores, Rule rule) const {
+    std::vector<std::pair<Index, float>> out;
+    for (std::size_t j = 0; j < n_; ++j) {
+      const auto [R, t] = rule(j);
+      if (R >= t) out.push_back({candidate(means_.order[j]), R});
+    }
+    std::sort(out.begin(), out.end());
+    indices.clear();
+    scores.clear();
+    for (const auto& [i, r] : out) { indices.push_back(i); scores.push_back(r); }
   }
 
   // Eq. R2 by sorted position j.

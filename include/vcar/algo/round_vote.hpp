@@ -114,8 +114,12 @@ private:
     std::vector<float> strict_scores;
     selected(tau_strict, strict, strict_scores, undershoot);
     if (!decisive_vote(strict.size(), indices.size(), split)) return tau;                   // Eq. R7
-    indices = std::move(strict);
-    scores = std::move(strict_scores);
+    if (robust_) {  // Eq. R7's seen candidates take tau_strict, the rest keep tau
+      robust_->selected(tau, tau_strict, seen_fraction, undershoot, indices, scores);
+    } else {
+      indices = std::move(strict);
+      scores = std::move(strict_scores);
+    }
     return tau_strict;
   }
 
