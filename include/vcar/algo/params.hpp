@@ -102,7 +102,8 @@ struct VcarParams {
   // Eq. R7, the strict threshold: the fine round keeps tau instead of its threshold (tau_fine, or
   // R6d's undershoot.tau) when the vote is decisive, i.e. when at most a fraction 0.1
   // (split_fraction, decisive_threshold.hpp) of the Gaussians kept at that threshold fall below
-  // tau; tau <= that threshold (0) = off.
+  // tau, for the candidates seen unoccluded in at least a fifth of their views (seen_fraction);
+  // tau <= that threshold (0) = off.
   struct Strict {
     float tau = 0.f;
   } strict;
