@@ -1,10 +1,14 @@
 #!/usr/bin/env bash
 # The field section of docs/results.md (section 6) and its charts, in one command (issue 46):
 #   benchmarks/field/run_field.sh BUILD [OUT]        (OUT default: field-run)
-# runs bench_field (BUILD/benchmarks/bench_field) on the held-out seeds in three parts, each in
-# OUT/<part>/ (a part with OUT/<part>/done is not run again: rerun the command after a stop),
-# merges them into docs/results/field.csv (plot_field.py --merge refuses a run twice) and writes
-# docs/results/field.md and docs/figures/field_*.svg (plot_field.py):
+# runs bench_field (BUILD/benchmarks/bench_field) on the held-out seeds in three parts, one seed
+# at a time, each in OUT/<part>/seed-<N>/ (one with a `done` file is not run again: rerun the
+# command after a stop, in the same or a later session), then replaces docs/results/field.csv by
+# the rows of OUT alone (plot_field.py --merge refuses a run twice) and writes
+# docs/results/field.md and docs/figures/field_*.svg (plot_field.py). Every row of one OUT comes
+# from one bench_field binary: OUT/bench_field.sha256 records it, and a later command with
+# another binary (the code changed and was rebuilt) refuses to go on in that OUT;
+# OUT/revision.txt says which commit and source trees it was built from.
 #   forward  GrabCut, the honest oracle, SAM-like failures with and without drift; every method
 #   orbit    GrabCut, the honest oracle, SAM-like with drift; every method but lbg (slow on 24 views)
 #   isnet    ISNet on every target (examples/segmenters/isnet: install.sh first; skipped with a
@@ -24,14 +28,40 @@ PARTS=${FIELD_PARTS:-forward orbit isnet}
 M=vcar:paper,vcar:robust,vcar:code,vcar:lean,naive,sagd,flashsplat,gaussiancut,ludvig
 ISNET="node $ROOT/examples/segmenters/isnet/isnet.mjs"
 mkdir -p "$OUT"
+# One binary per OUT (see above).
+sum=$(sha256sum "$B" | cut -d' ' -f1)
+if [ -f "$OUT/bench_field.sha256" ] && [ "$(cat "$OUT/bench_field.sha256")" != "$sum" ]; then
+  echo "$OUT was started with another bench_field ($(cat "$OUT/bench_field.sha256")); this one is $sum." >&2
+  echo "Its rows would mix two revisions: remove $OUT, or name another OUT." >&2
+  exit 2
+fi
+if [ ! -f "$OUT/bench_field.sha256" ]; then
+  echo "$sum" >"$OUT/bench_field.sha256"
+  { git -C "$ROOT" log -1 --format='commit %H %ci' 2>/dev/null || echo "commit unknown (not a git checkout)"
+    for d in include benchmarks examples; do echo "tree $d $(git -C "$ROOT" rev-parse "HEAD:$d" 2>/dev/null)"; done
+    git -C "$ROOT" status --porcelain -- include benchmarks examples 2>/dev/null | sed 's/^/uncommitted /'
+  } >"$OUT/revision.txt"
+fi
+# The seeds, one at a time (bench_field's sets: tuning 1-2, held-out 11-15; kTuningSeeds and
+# kHeldoutSeeds in bench_field.cpp).
+case $SEEDS in
+  heldout) SEED_LIST="11 12 13 14 15" ;;
+  tuning) SEED_LIST="1 2" ;;
+  all) SEED_LIST="1 2 11 12 13 14 15" ;;
+  *) SEED_LIST=${SEEDS//,/ } ;;
+esac
 
 part() {  # name, bench_field arguments...
-  local name=$1
+  local name=$1 seed dir
   shift
-  if [ -f "$OUT/$name/done" ]; then echo "== $name: done before ($OUT/$name)"; return; fi
-  rm -rf "${OUT:?}/$name"
-  echo "== $(date +%T) $name: $B $*"
-  "$B" --seeds "$SEEDS" --out "$OUT/$name" "$@"
+  for seed in $SEED_LIST; do
+    dir="$OUT/$name/seed-$seed"
+    if [ -f "$dir/done" ]; then echo "== $name, seed $seed: done before ($dir)"; continue; fi
+    rm -rf "${dir:?}"
+    echo "== $(date +%T) $name, seed $seed: $B --seeds $seed $*"
+    "$B" --seeds "$seed" --out "$dir" "$@"
+    touch "$dir/done"
+  done
   touch "$OUT/$name/done"
 }
 
@@ -51,7 +81,10 @@ for p in $PARTS; do
 done
 
 csvs=()
-for p in $PARTS; do [ -f "$OUT/$p/done" ] && csvs+=("$OUT/$p/field.csv"); done
+for p in $PARTS; do
+  [ -f "$OUT/$p/done" ] || continue
+  for seed in $SEED_LIST; do csvs+=("$OUT/$p/seed-$seed/field.csv"); done
+done
 [ ${#csvs[@]} -gt 0 ] || { echo "no part finished" >&2; exit 1; }
 /usr/bin/python3 "$ROOT/benchmarks/plot_field.py" --merge "$ROOT/docs/results/field.csv" "${csvs[@]}"
 /usr/bin/python3 "$ROOT/benchmarks/plot_field.py" "$ROOT/docs/results/field.csv"
