@@ -4,7 +4,7 @@
 // 3D result. docs/results.md ("Field") has the command, the table and the charts.
 //
 //   bench_field [--quick] [--out DIR] [--stage FILE] [--seeds tuning|heldout|all|N,N,...]
-//               [--targets a,b] [--rigs forward,orbit]
+//               [--targets a,b] [--rigs forward,orbit,sparse]
 //               [--segmenters grabcut,oracle,oracle-sam,oracle-sam-nodrift,isnet,exact]
 //               [--methods vcar:paper,vcar:robust,vcar:code,naive,...] [--width W --height H]
 //               [--set key=value]... (VcarParams of the vcar:robust runs only: tuning the default)
@@ -154,7 +154,10 @@ const std::vector<std::string> kSegmenters = {"grabcut", "oracle", "oracle-sam",
 // Segmenters run only when named (--segmenters): ISNet costs 4-10 s a frame on 2 cores; exact is
 // a ceiling, not a segmenter.
 const std::vector<std::string> kNamedOnly = {"isnet", "exact"};
-const std::vector<std::string> kRigs = {"forward", "orbit"};
+const std::vector<std::string> kRigs = {"forward", "orbit"};  // the default grid's and the cross product's
+// Every rig --rigs may name: also the sparse capture (an orbit of 6 views unless the stage file
+// says "views", synth::sparse_rig), only when named.
+const std::vector<std::string> kAllRigs = {"forward", "orbit", "sparse"};
 
 std::vector<std::string> all_methods() {
   std::vector<std::string> m = {"vcar:paper", "vcar:robust", "vcar:code", "vcar:lean"};
@@ -401,8 +404,8 @@ std::vector<Cell> plan_cells(const Options& o) {
     if (std::find(kSegmenters.begin(), kSegmenters.end(), c.segmenter) == kSegmenters.end() &&
         std::find(kNamedOnly.begin(), kNamedOnly.end(), c.segmenter) == kNamedOnly.end())
       throw Error("unknown segmenter '" + c.segmenter + "' (grabcut, oracle, oracle-sam, oracle-sam-nodrift, isnet, exact)", "--segmenters");
-    if (std::find(kRigs.begin(), kRigs.end(), c.rig) == kRigs.end())
-      throw Error("unknown rig '" + c.rig + "' (forward, orbit)", "--rigs");
+    if (std::find(kAllRigs.begin(), kAllRigs.end(), c.rig) == kAllRigs.end())
+      throw Error("unknown rig '" + c.rig + "' (forward, orbit, sparse)", "--rigs");
     const std::vector<std::string> known = all_methods();
     for (const auto& m : c.methods)
       if (m.rfind("vcar:robust@", 0) != 0 && std::find(known.begin(), known.end(), m) == known.end())
@@ -458,7 +461,7 @@ public:
     // The oracles' label copies of the scene (synth/rendered_labels.hpp), shared by both oracles.
     std::shared_ptr<const synth::RenderedLabels> labels;
     if (oracle) labels = std::make_shared<const synth::RenderedLabels>(w);
-    for (const std::string& rig_name : kRigs) {
+    for (const std::string& rig_name : kAllRigs) {
       if (!rigs.count(rig_name)) continue;
       synth::RigParams rp;  // as `vcar synth --stage` (cmd_synth.cpp)
       rp.intrinsics = synth::make_intrinsics(width_, height_);

@@ -28,7 +28,9 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PEERS = ["naive", "sagd", "flashsplat", "gaussiancut", "ludvig", "lbg"]
 METHODS = ["vcar:paper", "vcar:robust", "vcar:code", "vcar:lean"] + PEERS
 SEGMENTERS = ["grabcut", "isnet", "oracle", "oracle-sam-nodrift", "oracle-sam"]
-RIGS = ["forward", "orbit"]
+# The rig as the tables name it: its kind, with the image size where it is not the field's 640 x 480
+# (run_field.sh's hires part: the forward rig at 1008 x 756).
+RIGS = ["forward", "forward 1008x756", "orbit", "sparse"]
 NUM = {"seed", "gaussians", "object_gaussians", "width", "height", "n_train", "n_eval", "miou", "macc", "miou_01",
        "boundary_iou", "boundary_f1", "f1_3d", "precision_3d", "recall_3d", "selected", "t_render", "t_segment",
        "t_method", "time_s", "frames_segmented", "n_coarse", "n_fine", "mask_iou", "mask_none", "mask_frames", "t_own"}
@@ -46,6 +48,9 @@ def load(path):
             for k in NUM:
                 r[k] = float(r[k]) if r.get(k, "") != "" else math.nan
             r["key"] = "vcar:" + r["variant"] if r["method"] == "vcar" else r["method"]
+            w, h = r.get("width", 640), r.get("height", 480)
+            if (float(w), float(h)) != (640.0, 480.0):
+                r["rig"] = "%s %dx%d" % (r["rig"], float(w), float(h))
             rows.append(r)
     return rows
 
@@ -276,7 +281,7 @@ def field_md(rows, path):
 
 def merge(out, inputs):
     """Concatenates bench_field CSVs (parts of one field run) into `out`; their headers must match,
-    and no (method, variant, rig, segmenter, seed, target) may come twice."""
+    and no (method, variant, rig, width, height, segmenter, seed, target) may come twice."""
     header, rows, seen = None, [], set()
     for path in inputs:
         with open(path, newline="") as f:
@@ -286,7 +291,7 @@ def merge(out, inputs):
                 header = h
             elif h != header:
                 sys.exit("plot_field: %s: its columns differ from %s's" % (path, inputs[0]))
-            key = [h.index(k) for k in ("method", "variant", "rig", "segmenter", "seed", "target")]
+            key = [h.index(k) for k in ("method", "variant", "rig", "width", "height", "segmenter", "seed", "target")]
             for row in r:
                 k = tuple(row[i] for i in key)
                 if k in seen:

