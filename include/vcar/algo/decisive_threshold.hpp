@@ -22,7 +22,8 @@
 // two thresholds (the table inside a donut's hole, GrabCut's leaks); the object's own hidden
 // back and underside, and its soft fringe, are seen from few views and sit there too (their
 // R_i falls back on the plain level, Eq. R2). f = 0.2 (seen_fraction, a constant, chosen on
-// the field's tuning seeds: docs/robust.md, R7). Without the occlusion test every candidate counts as seen (V^o_i = V_i): the global rule.
+// the field's tuning seeds: docs/robust.md, R7). Without the occlusion test every candidate
+// counts as seen (V^o_i = V_i): the global rule.
 #include <cstddef>
 
 namespace vcar {
