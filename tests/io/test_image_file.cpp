@@ -140,6 +140,16 @@ TEST_CASE("masks: 8-bit, 16-bit, paletted, RGBA; foreground from half range") {
     CHECK(m.width == 3);
     CHECK(m.data == std::vector<std::uint8_t>{0, 255, 255});
   }
+  SECTION("paletted: by index (conventions §4), whatever the colours") {
+    // Index 0 white, index 1 black (a writer's padding colour), index 2 red: by colour the
+    // mask would read {255, 0, 255}; by index it is {0, 255, 255}.
+    const std::string pal("\xff\xff\xff\x00\x00\x00\xff\x00\x00", 9);
+    write_bytes(tmp / "mi.png", make_png(3, 1, 8, 3, {std::string("\x00\x01\x02", 3)}, pal));
+    CHECK(vcar::io::read_mask(tmp / "mi.png").data == std::vector<std::uint8_t>{0, 255, 255});
+    // 4 bits per index, eight pixels in one row (indices 0 1 2 0 1 2 0 0), the same palette.
+    write_bytes(tmp / "m4.png", make_png(8, 1, 4, 3, {std::string("\x01\x20\x12\x00", 4)}, pal));
+    CHECK(vcar::io::read_mask(tmp / "m4.png").data == std::vector<std::uint8_t>{0, 255, 255, 0, 255, 255, 0, 0});
+  }
   SECTION("RGBA: opaque black background is background; black-only colour uses alpha") {
     vcar::Image<std::uint8_t> a(2, 1, 4);
     a.data = {0, 0, 0, 255, 0, 200, 0, 255};

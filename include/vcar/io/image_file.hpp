@@ -6,8 +6,10 @@
 //   (>= 128), so compression noise around 0 and 255 (JPEG masks) counts for nothing; 16-bit PNG
 //   (read with stbi_load_16) likewise at >= 32768. A mask that holds only the values 0 and 1 is
 //   a 0/1 label mask: 1 is foreground.
-// - paletted PNG (stb expands the palette to RGB(A)): a pixel is foreground when its palette
-//   colour is not black (DAVIS/VOC palettes: index 0 black, objects coloured, some dark).
+// - paletted PNG: by index, as conventions §4 says: a pixel is foreground when its palette index
+//   is not 0, whatever the colours (DAVIS/VOC palettes: index 0 black, objects coloured, some
+//   dark; other writers pad their palettes with black entries). stb expands a palette to colours,
+//   so the palette is rewritten first, in memory, to entry k = grey k (detail::palette_as_index).
 // - Alpha is ignored, except when the colour is background everywhere: then the alpha channel
 //   is the mask (same threshold).
 // - a mask of another size than expected is an error naming the file and both sizes.
@@ -50,6 +52,22 @@ inline std::vector<stbi_uc> read_file_bytes(const std::filesystem::path& path, c
   in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
   if (static_cast<std::size_t>(in.gcount()) != bytes.size()) throw Error("cannot read image file", where);
   return bytes;
+}
+
+// A paletted PNG's bytes with each PLTE entry k replaced by the grey (k, k, k), so that stb's
+// decoded colour is the index (a palette holds at most 256 entries). The chunk's CRC is left as
+// it was: stb does not check CRCs (stb_image.h: "no CRC checking"), and these bytes are only
+// decoded here, never written. Call after check_image_bytes (chunk lengths within the file).
+inline std::vector<stbi_uc> palette_as_index(std::vector<stbi_uc> b) {
+  for (std::size_t at = 8; at + 12 <= b.size();) {
+    const std::size_t len = (std::size_t{b[at]} << 24) | (std::size_t{b[at + 1]} << 16) | (std::size_t{b[at + 2]} << 8) | b[at + 3];
+    if (std::equal(b.begin() + static_cast<std::ptrdiff_t>(at) + 4, b.begin() + static_cast<std::ptrdiff_t>(at) + 8, "PLTE"))
+      for (std::size_t k = 0; 3 * k + 2 < len && k < 256; ++k)
+        for (std::size_t c = 0; c < 3; ++c) b[at + 8 + 3 * k + c] = static_cast<stbi_uc>(k);
+    if (std::equal(b.begin() + static_cast<std::ptrdiff_t>(at) + 4, b.begin() + static_cast<std::ptrdiff_t>(at) + 8, "IEND")) break;
+    at += len + 12;  // length, type, data, CRC
+  }
+  return b;
 }
 
 // Lying sizes are rejected before stb allocates for them: a PNG chunk longer than the rest of
@@ -162,8 +180,18 @@ inline Mask read_mask(const std::filesystem::path& path, int expected_width = -1
   detail::check_image_bytes(bytes, where);
   Mask m;
   std::size_t N = 0;
-  // PNG colour type 3 (IHDR byte 25): paletted, no compression noise, any non-black colour counts.
+  // PNG colour type 3 (IHDR byte 25): paletted; read by index (the top of this file).
   const bool paletted = bytes.size() > 25 && bytes[0] == 0x89 && bytes[1] == 'P' && bytes[25] == 3;
+  if (paletted) {
+    const std::vector<stbi_uc> indexed = detail::palette_as_index(bytes);
+    int n2 = 0;
+    stbi_uc* px = stbi_load_from_memory(indexed.data(), len, &w, &h, &n2, 0);
+    if (!px) throw Error("cannot read mask: " + detail::stb_reason(), where);
+    m = Mask(w, h, 1);
+    for (std::size_t p = 0; p < m.pixels(); ++p) m.data[p] = px[p * static_cast<std::size_t>(n2)] != 0 ? 255 : 0;  // index != 0
+    stbi_image_free(px);
+    return m;
+  }
   auto fill = [&](const auto* px, unsigned half) {
     m = Mask(w, h, 1);  // sized from the decoded image, not from the header alone
     N = m.pixels();
@@ -177,7 +205,7 @@ inline Mask read_mask(const std::filesystem::path& path, int expected_width = -1
     const int channel0 = colour_max == 0 && colour != n ? colour : 0;
     const int channels = colour_max == 0 && colour != n ? 1 : colour;
     const unsigned value_max = channel0 == 0 ? colour_max : alpha_max;
-    const unsigned threshold = paletted || value_max == 1 ? 1 : half;  // 0/1 label masks: 1 is foreground
+    const unsigned threshold = value_max == 1 ? 1 : half;  // 0/1 label masks: 1 is foreground
     for (std::size_t p = 0; p < N; ++p) {
       bool fg = false;
       for (int c = channel0; c < channel0 + channels; ++c) fg = fg || px[p * n + c] >= threshold;
