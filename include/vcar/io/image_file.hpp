@@ -23,6 +23,7 @@
 #include <fstream>
 #include <ostream>
 #include <string>
+#include <string_view>
 #include <system_error>
 #include <vector>
 
@@ -54,19 +55,33 @@ inline std::vector<stbi_uc> read_file_bytes(const std::filesystem::path& path, c
   return bytes;
 }
 
+// Calls f(at, len, type) for each chunk of a PNG's bytes (nothing for another format): `at` the
+// chunk's first byte, `len` its declared data length, `type` its four letters; stops after IEND
+// or at the end of the bytes. f may write the chunk's data, not its length.
+template <class Bytes, class F>
+void for_each_png_chunk(Bytes& b, F&& f) {
+  static constexpr stbi_uc png_sig[8] = {0x89, 'P', 'N', 'G', 0x0d, 0x0a, 0x1a, 0x0a};
+  if (b.size() < 8 || !std::equal(png_sig, png_sig + 8, b.begin())) return;
+  for (std::size_t at = 8; at + 8 <= b.size();) {
+    const std::uint64_t len = (std::uint64_t{b[at]} << 24) | (std::uint64_t{b[at + 1]} << 16) |
+                              (std::uint64_t{b[at + 2]} << 8) | b[at + 3];
+    const std::string_view type(reinterpret_cast<const char*>(b.data() + at + 4), 4);
+    f(at, len, type);
+    if (type == "IEND") break;
+    at += static_cast<std::size_t>(len) + 12;  // length, type, data, CRC
+  }
+}
+
 // A paletted PNG's bytes with each PLTE entry k replaced by the grey (k, k, k), so that stb's
 // decoded colour is the index (a palette holds at most 256 entries). The chunk's CRC is left as
 // it was: stb does not check CRCs (stb_image.h: "no CRC checking"), and these bytes are only
 // decoded here, never written. Call after check_image_bytes (chunk lengths within the file).
 inline std::vector<stbi_uc> palette_as_index(std::vector<stbi_uc> b) {
-  for (std::size_t at = 8; at + 12 <= b.size();) {
-    const std::size_t len = (std::size_t{b[at]} << 24) | (std::size_t{b[at + 1]} << 16) | (std::size_t{b[at + 2]} << 8) | b[at + 3];
-    if (std::equal(b.begin() + static_cast<std::ptrdiff_t>(at) + 4, b.begin() + static_cast<std::ptrdiff_t>(at) + 8, "PLTE"))
+  for_each_png_chunk(b, [&](std::size_t at, std::uint64_t len, std::string_view type) {
+    if (type == "PLTE")
       for (std::size_t k = 0; 3 * k + 2 < len && k < 256; ++k)
         for (std::size_t c = 0; c < 3; ++c) b[at + 8 + 3 * k + c] = static_cast<stbi_uc>(k);
-    if (std::equal(b.begin() + static_cast<std::ptrdiff_t>(at) + 4, b.begin() + static_cast<std::ptrdiff_t>(at) + 8, "IEND")) break;
-    at += len + 12;  // length, type, data, CRC
-  }
+  });
   return b;
 }
 
@@ -74,17 +89,11 @@ inline std::vector<stbi_uc> palette_as_index(std::vector<stbi_uc> b) {
 // the file (stb reserves the declared length first), or a header claiming more pixels than the
 // file can encode (no format stb decodes packs over 4096 raw bytes into one file byte).
 inline void check_image_bytes(const std::vector<stbi_uc>& b, const std::string& where) {
-  static constexpr stbi_uc png_sig[8] = {0x89, 'P', 'N', 'G', 0x0d, 0x0a, 0x1a, 0x0a};
-  if (b.size() >= 8 && std::equal(png_sig, png_sig + 8, b.begin()))
-    for (std::size_t at = 8; at + 8 <= b.size();) {
-      const std::uint64_t len = (std::uint64_t{b[at]} << 24) | (std::uint64_t{b[at + 1]} << 16) |
-                                (std::uint64_t{b[at + 2]} << 8) | b[at + 3];
-      if (len + 12 > b.size() - at)
-        throw Error("PNG chunk at byte " + std::to_string(at) + " declares " + std::to_string(len) +
-                    " bytes, more than the file holds (corrupt or truncated?)", where);
-      if (std::equal(b.begin() + static_cast<std::ptrdiff_t>(at) + 4, b.begin() + static_cast<std::ptrdiff_t>(at) + 8, "IEND")) break;
-      at += static_cast<std::size_t>(len) + 12;  // length, type, data, CRC
-    }
+  for_each_png_chunk(b, [&](std::size_t at, std::uint64_t len, std::string_view) {
+    if (len + 12 > b.size() - at)
+      throw Error("PNG chunk at byte " + std::to_string(at) + " declares " + std::to_string(len) +
+                  " bytes, more than the file holds (corrupt or truncated?)", where);
+  });
   const int len = static_cast<int>(b.size());
   int w = 0, h = 0, n = 0;
   if (!stbi_info_from_memory(b.data(), len, &w, &h, &n)) throw Error("cannot read image: " + stb_reason(), where);
