@@ -160,28 +160,63 @@ def targets_table(rows):
     return out
 
 
-def default_vs_paper(rows):
-    """Per case: the default's 3D F1 against the paper preset's (and the difference)."""
+def versus_paper(rows, key="vcar:robust"):
+    """Per case: 3D F1 of `key` (the default, or issue 47's candidate) against the paper preset's."""
     seeds = sorted({int(r["seed"]) for r in rows})
-    out = ["| segmenter | rig | target | " + " | ".join("seed %d" % s for s in seeds) + " | default below paper by > 0.005 |",
+    out = ["| segmenter | rig | target | " + " | ".join("seed %d" % s for s in seeds) + " | below paper by > 0.005 |",
            "|---|---|---|" + "---|" * len(seeds) + "---|"]
     for seg, rig in cells(rows):
         rs = [r for r in rows if r["segmenter"] == seg and r["rig"] == rig]
-        if not {"vcar:paper", "vcar:robust"} <= {r["key"] for r in rs}:
+        if not {"vcar:paper", key} <= {r["key"] for r in rs}:
             continue
         first = True
         for t in ["biker", "guitar", "donut"]:
             cols, worse = [], 0
             for s in seeds:
                 d = {r["key"]: r["f1_3d"] for r in rs if r["target"] == t and int(r["seed"]) == s}
-                if "vcar:paper" in d and "vcar:robust" in d:
-                    delta = d["vcar:robust"] - d["vcar:paper"]
+                if "vcar:paper" in d and key in d:
+                    delta = d[key] - d["vcar:paper"]
                     worse += delta < -0.005
-                    cols.append("%s / %s (%+.3f)" % (fmt(d["vcar:robust"]), fmt(d["vcar:paper"]), delta))
+                    cols.append("%s / %s (%+.3f)" % (fmt(d[key]), fmt(d["vcar:paper"]), delta))
                 else:
                     cols.append("-")
             out.append("| %s | %s | %s | %s | %d |" % (SEG_LABEL[seg] if first else "", rig if first else "", t,
                                                        " | ".join(cols), worse))
+            first = False
+    return out
+
+
+def paired(rows, key):
+    """(paper row, `key` row) of every case (segmenter, rig, seed, target) that has both."""
+    by = group(rows, ["segmenter", "rig", "seed", "target"])
+    out = []
+    for k in sorted(by):
+        d = {r["key"]: r for r in by[k]}
+        if "vcar:paper" in d and key in d:
+            out.append((d["vcar:paper"], d[key]))
+    return out
+
+
+def bars_table(rows):
+    """Issue 47's bars, per cell, for the default and the candidate: the cases more than 0.005
+    3D F1 below the paper preset, the worst difference, the worst case's 3D F1, and the own time
+    (t_own: everything but renders and the segmenter) against the paper preset's in the same run
+    (median of the per-case ratios)."""
+    out = ["| segmenter | rig | method | cases | below paper by > 0.005 | worst difference | worst 3D F1 "
+           "| own time / paper's (median) | own time, median (s) |", "|---|---|---|---|---|---|---|---|---|"]
+    for seg, rig in cells(rows):
+        rs = [r for r in rows if r["segmenter"] == seg and r["rig"] == rig]
+        first = True
+        for key in ["vcar:robust", "vcar:lean"]:
+            pairs = paired(rs, key)
+            if not pairs:
+                continue
+            delta = [b["f1_3d"] - a["f1_3d"] for a, b in pairs]
+            ratio = [b["t_own"] / a["t_own"] for a, b in pairs if a["t_own"] > 0]
+            out.append("| %s | %s | %s | %d | %d | %+.3f | %s | %s | %s |" % (
+                SEG_LABEL[seg] if first else "", rig if first else "", label(key), len(pairs),
+                sum(d < -0.005 for d in delta), min(delta), fmt(min(b["f1_3d"] for _, b in pairs)),
+                fmt(median(ratio), 2), secs(median(b["t_own"] for _, b in pairs))))
             first = False
     return out
 
@@ -263,14 +298,20 @@ def field_md(rows, path):
         seeds = sorted({int(r["seed"]) for r in held})
         lines += ["## Held-out seeds (%s): means" % ", ".join(map(str, seeds)), ""] + means_table(held) + [""]
         lines += ["## Held-out seeds: per target", "", "3D F1 / mIoU, means over the held-out seeds.", ""] + targets_table(held) + [""]
+        lines += ["## Held-out seeds: issue 47's bars",
+                  "", "The default (robust) and the candidate (paper preset + R3 + R13) against the paper preset, "
+                  "case by case (a case: segmenter, rig, seed, target).", ""] + bars_table(held) + [""]
         lines += ["## Held-out seeds: the default against the paper preset, per case",
-                  "", "3D F1 of the default (robust) / of the paper preset (difference).", ""] + default_vs_paper(held) + [""]
+                  "", "3D F1 of the default (robust) / of the paper preset (difference).", ""] + versus_paper(held) + [""]
+        if any(r["key"] == "vcar:lean" for r in held):
+            lines += ["## Held-out seeds: the candidate (paper preset + R3 + R13) against the paper preset, per case",
+                      "", "3D F1 of the candidate / of the paper preset (difference).", ""] + versus_paper(held, "vcar:lean") + [""]
     if tune:
         seeds = sorted({int(r["seed"]) for r in tune})
         lines += ["## Tuning seeds (%s): means" % ", ".join(map(str, seeds)), "",
                   "The seeds the default may be tuned on: not evidence of how it generalises.", ""] + means_table(tune) + [""]
         lines += ["## Tuning seeds: per target", "", "3D F1 / mIoU, means over the tuning seeds.", ""] + targets_table(tune) + [""]
-        lines += ["## Tuning seeds: the default against the paper preset, per case", ""] + default_vs_paper(tune) + [""]
+        lines += ["## Tuning seeds: the default against the paper preset, per case", ""] + versus_paper(tune) + [""]
     if other:
         lines += ["## Other seeds: means", ""] + means_table(other) + [""]
     out = os.path.join(ROOT, "docs", "results", "field.md")
