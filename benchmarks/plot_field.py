@@ -27,7 +27,7 @@ plt.rcParams["svg.fonttype"] = "none"  # text stays text (smaller, diff-able)
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PEERS = ["naive", "sagd", "flashsplat", "gaussiancut", "ludvig", "lbg"]
 METHODS = ["vcar:paper", "vcar:robust", "vcar:code", "vcar:lean"] + PEERS
-SEGMENTERS = ["grabcut", "isnet", "oracle", "oracle-sam-nodrift", "oracle-sam"]
+SEGMENTERS = ["grabcut", "isnet", "oracle", "oracle-sam-nodrift", "oracle-sam", "exact"]
 # The rig as the tables name it: its kind, with the image size where it is not the field's 640 x 480
 # (run_field.sh's hires part: the forward rig at 1008 x 756).
 RIGS = ["forward", "forward 1008x756", "orbit", "sparse"]
@@ -38,7 +38,8 @@ LABEL = {"vcar:paper": "VCAR, paper preset", "vcar:robust": "vcar default (robus
          "vcar:code": "VCAR, released code's preset", "vcar:lean": "VCAR paper preset + R3 + R13 (issue 47)"}
 SEG_LABEL = {"grabcut": "GrabCut", "isnet": "ISNet", "oracle": "oracle (rendered)",
              "oracle-sam-nodrift": "oracle + SAM-like failures, no drift",
-             "oracle-sam": "oracle + SAM-like failures with drift"}
+             "oracle-sam": "oracle + SAM-like failures with drift",
+             "exact": "exact masks (the target alone in the fine round)"}
 
 
 def load(path):
