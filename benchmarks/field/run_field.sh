@@ -27,7 +27,8 @@
 # revision.txt); on a fresh machine, check out the commit named in revision.txt at the source
 # path the first build used (the binary records it: it reads that tree's stage file), build
 # bench_field as before (the same compiler gives the same bytes, so the sha256 check passes) and
-# run the same command: the committed seeds are skipped.
+# run the same command: the committed seeds are skipped. FIELD_COMMIT=1 commits each seed as it
+# finishes (below).
 # While it runs, change this file only by replacing it (a rename): bash reads it as it goes.
 set -eu
 [ $# -ge 1 ] || { echo "usage: $0 BUILD [OUT]" >&2; exit 2; }
@@ -67,6 +68,14 @@ case $SEEDS in
   *) SEED_LIST=${SEEDS//,/ } ;;
 esac
 
+# FIELD_COMMIT=1 (OUT inside the repository): each finished seed is committed, only its files and
+# OUT's record (other staged changes stay staged); a failed commit is reported, the run goes on.
+commit_seed() {  # dir, what
+  local files=("$1/field.csv" "$1/done" "$OUT/bench_field.sha256" "$OUT/revision.txt")
+  { git -C "$ROOT" add -- "${files[@]}" && git -C "$ROOT" commit -q -m "Field run (issue 46): finished $2" -- "${files[@]}"; } ||
+    echo "== $2: not committed (commit it by hand)"
+}
+
 part() {  # name, bench_field arguments...
   local name=$1 seed dir
   shift
@@ -77,6 +86,7 @@ part() {  # name, bench_field arguments...
     echo "== $(date +%T) $name, seed $seed: $B --seeds $seed $*"
     "$B" --seeds "$seed" --out "$dir" "$@"
     touch "$dir/done"
+    [ -z "${FIELD_COMMIT:-}" ] || commit_seed "$dir" "$name $seed"
   done
   touch "$OUT/$name/done"
 }
