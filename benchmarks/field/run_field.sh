@@ -71,7 +71,7 @@ esac
 # FIELD_COMMIT=1 (OUT inside the repository): each finished seed is committed, only its files and
 # OUT's record (other staged changes stay staged); a failed commit is reported, the run goes on.
 commit_seed() {  # dir, what
-  local files=("$1/field.csv" "$1/done" "$OUT/bench_field.sha256" "$OUT/revision.txt")
+  local files=("$1/field.csv" "$1/field.json" "$1/done" "$OUT/bench_field.sha256" "$OUT/revision.txt")
   { git -C "$ROOT" add -- "${files[@]}" && git -C "$ROOT" commit -q -m "Field run (issue 46): finished $2" -- "${files[@]}"; } ||
     echo "== $2: not committed (commit it by hand)"
 }
