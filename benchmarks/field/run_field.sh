@@ -18,13 +18,13 @@
 #            fine round the target alone): issue 47's soft edge; every method but lbg
 #   isnet    ISNet on every target (examples/segmenters/isnet: install.sh first; skipped with a
 #            message when its packages are missing); the VCAR presets and the peers but lbg
-# Measured on the 2-core machine (2026-12-01/02, beside other work): forward about 3 h, orbit
-# about 40 minutes a seed, ISNet about 15 minutes a case. FIELD_SEEDS (default heldout) and
+# Measured on the 2-core machine (2026-12-05, quiet): forward and orbit 12-17 minutes a seed;
+# ISNet about 15 minutes a case (2026-12-02, beside other work). FIELD_SEEDS (default heldout) and
 # FIELD_PARTS (default "forward orbit sparse hires exact isnet") narrow a run, e.g. FIELD_PARTS=forward
 # FIELD_SEEDS=11 for a look. Deterministic: the same build gives the same rows but the seconds.
 # A run longer than one working session: put OUT in the repository (docs/results/field-run) and
-# commit each finished seed (its field.csv and done file, with OUT's bench_field.sha256 and
-# revision.txt); on a fresh machine, check out the commit named in revision.txt at the source
+# commit each finished seed (its field.csv, field.json and done file, with OUT's
+# bench_field.sha256 and revision.txt); on a fresh machine, check out the commit named in revision.txt at the source
 # path the first build used (the binary records it: it reads that tree's stage file), build
 # bench_field as before (the same compiler gives the same bytes, so the sha256 check passes) and
 # run the same command: the committed seeds are skipped. FIELD_COMMIT=1 commits each seed as it
