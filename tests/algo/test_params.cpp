@@ -90,6 +90,7 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
     CHECK(p.undershoot.band == 0.f);
     CHECK(p.undershoot.tau == 0.f);
     CHECK(p.strict.tau <= p.tau_fine);  // Eq. R7 off
+    CHECK_FALSE(p.valley.enabled);      // Eq. R14 off
     CHECK(p.abr_lowpass);
     CHECK_FALSE(p.snap.enabled);            // Eq. R11-R12 off
   }

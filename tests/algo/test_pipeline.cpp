@@ -402,6 +402,28 @@ TEST_CASE("Eq. R8: ABR reads the training masks widened by their undershoot only
   p.undershoot.tau = 0.f;
   CHECK(run(5).tau_fine_applied == p.strict.tau);
   p.undershoot.tau = vcar::VcarParams::robust().undershoot.tau;
+  // Eq. R14 on: the split vote of eroded masks takes the valley of its ratios instead of R6d's
+  // threshold (a bin centre at or above tau_coarse); a decisive vote keeps R7's strict one.
+  p.valley.enabled = true;
+  const auto bin_centre = [&](float t) { return std::abs(t * 20.f - 0.5f - std::round(t * 20.f - 0.5f)) < 1e-4f; };
+  const vcar::Diagnostics valley5 = run(5);
+  INFO("R14 on eroded masks: " << valley5.tau_fine_applied);
+  CHECK(bin_centre(valley5.tau_fine_applied));
+  CHECK(valley5.tau_fine_applied >= p.tau_coarse);
+  // Here the rim's ratios spread below 0.7 with nothing else in G_coarse: the valley is lower,
+  // and the same reading of the vote at a lower threshold keeps a superset.
+  CHECK(valley5.tau_fine_applied < p.undershoot.tau);
+  CHECK(valley5.n_fine > eroded.n_fine);
+  CHECK(run(0).tau_fine_applied == p.strict.tau);
+  // R7 off: R14 decides every fine vote, the decisive one of exact masks too.
+  p.strict.tau = 0.f;
+  const float valley0 = run(0).tau_fine_applied;
+  INFO("R14 on exact masks: " << valley0);
+  CHECK(bin_centre(valley0));
+  CHECK(valley0 >= p.tau_coarse);
+  p = vcar::VcarParams::robust();
+  p.force_fine_round = true;
+  p.phi_s_deg = vcar::VcarParams::nvos().phi_s_deg;
   CHECK(eroded.abr_masks_widened == cams.size());  // every training view has an undershooting mask
   // Exact masks: a decisive vote, ABR reads them as they are.
   const vcar::Diagnostics exact = run(0);

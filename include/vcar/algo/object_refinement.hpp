@@ -23,6 +23,7 @@
 #include "vcar/algo/round.hpp"
 #include "vcar/algo/round_vote.hpp"
 #include "vcar/algo/spiral_sampler.hpp"
+#include "vcar/algo/vote_valley.hpp"
 #include "vcar/algo/undershoot.hpp"
 #include "vcar/algo/view_completeness.hpp"
 #include "vcar/concepts/renderer.hpp"
@@ -198,7 +199,7 @@ public:
     if (m) round_undershoot_.push_back(fine_->last_undershoot_px());
   }
 
-  // After the round: its timings (render, segmenter, voting) and the fine selection (Eq. 3, R7).
+  // After the round: its timings (render, segmenter, voting) and the fine selection (Eq. 3, R7, or R14).
   bool end_round(double render_s, double segment_s, double voting_s) {
     timing("fine_render", render_s);
     timing("fine_segment", segment_s);
@@ -209,6 +210,15 @@ public:
                           : params_.tau_fine;
     fine_->weigh_views(tau);  // Eq. R13
     verdict_ = fine_->selected(tau, params_.strict.tau, split_fraction, selected_, scores_);
+    // Eq. R14 where R7 is off or finds the vote split: the threshold at the vote's valley.
+    if (params_.valley.enabled && !(params_.strict.tau > tau && verdict_.tau == params_.strict.tau)) {
+      std::vector<Index> all;
+      fine_->selected(0.f, all, scores_, verdict_.undershoot);
+      const float t = vote_valley(scores_, params_.tau_coarse);  // Eq. R14
+      fine_->selected(t, selected_, scores_, verdict_.undershoot);
+      verdict_.tau = t;
+      verdict_.split = verdict_.split || t < params_.tau_fine;
+    }
     diag_.tau_fine_applied = verdict_.tau;
     diag_.undershoot_applied = verdict_.undershoot;
     diag_.n_fine = diag_.n_final = selected_.size();

@@ -107,6 +107,13 @@ struct VcarParams {
   struct Strict {
     float tau = 0.f;
   } strict;
+  // Eq. R14, the fine threshold at the emptiest bin of the fine vote's ratio histogram between
+  // tau_coarse and its fullest bin (vote_valley.hpp), in place of tau_fine and R6d's threshold
+  // where R7 finds the vote split or is off (tau_strict = 0: R14 always); R8 and R10 read the
+  // vote as split there, or where that threshold is below tau_fine. Off in every preset.
+  struct Valley {
+    bool enabled = false;
+  } valley;
   // Eq. R10: a fine candidate that no training view sees (the coarse round's occlusion test) is
   // background when more seen background Gaussians than seen selected ones lie on its plane
   // within radius D (D the selection's extent): normals within 5 degrees, plane distance within
@@ -239,7 +246,7 @@ struct VcarParams {
     f("force_fine_round", p.force_fine_round);
     f("occlusion", p.evidence.occlusion); f("kappa", p.evidence.kappa);
     f("undershoot_band", p.undershoot.band); f("undershoot_tau", p.undershoot.tau);
-    f("tau_strict", p.strict.tau); f("abr_lowpass", p.abr_lowpass);
+    f("tau_strict", p.strict.tau); f("valley", p.valley.enabled); f("abr_lowpass", p.abr_lowpass);
     f("coplanar_radius", p.coplanar.radius); f("snap", p.snap.enabled);
     f("view_reliability", p.reliability.enabled);
   }
