@@ -135,7 +135,7 @@ using evidence::is_360;
 using evidence::kPeers;
 const std::vector<std::string> kVariants = {"coarse", "sss", "abr", "full", "occlusion", "gapdir", "robust"};
 // The robust preset with one mechanism changed each (docs/robust.md ablation).
-const std::vector<std::string> kRobustAblation = {"robust-nor3", "robust-nolowpass", "robust-tau08", "robust-tau07",
+const std::vector<std::string> kRobustAblation = {"robust-nor3", "robust-nolowpass", "robust-novalley", "robust-tau07",
                                                   "robust-noundershoot", "robust-nostrict",
                                                   "robust-nocoplanar", "robust-nosnap"};
 
@@ -171,8 +171,8 @@ VcarParams vcar_params(const std::string& variant, const Experiment& e, const st
       p.coplanar.radius = 0.f;
     }
     else if (variant == "robust-nolowpass") p.abr_lowpass = false;
-    else if (variant == "robust-tau08") p.undershoot.tau = 0.f;   // Eq. R6d off: always 0.8
-    else if (variant == "robust-tau07") p.tau_fine = 0.7f;        // always 0.7 (before R6d)
+    else if (variant == "robust-novalley") p.valley.enabled = false;  // Eq. R14 off: tau_fine 0.8
+    else if (variant == "robust-tau07") p.valley.enabled = false, p.tau_fine = 0.7f;  // always 0.7 (before R6d)
     else if (variant == "robust-noundershoot") p.undershoot.band = 0.f;
     else if (variant == "robust-nostrict") p.strict.tau = 0.f;
     else if (variant == "robust-nocoplanar") p.coplanar.radius = 0.f;

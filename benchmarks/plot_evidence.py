@@ -24,7 +24,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RIGS = ["forward", "orbit", "sparse", "hemisphere"]
 PEERS = ["naive", "sagd", "flashsplat", "gaussiancut", "ludvig", "lbg"]
 VARIANTS = ["coarse", "sss", "abr", "full", "occlusion", "gapdir", "robust"]
-ROBUST_ABLATION = ["robust-nor3", "robust-nolowpass", "robust-tau08", "robust-tau07", "robust-noundershoot",
+ROBUST_ABLATION = ["robust-nor3", "robust-nolowpass", "robust-novalley", "robust-tau07", "robust-noundershoot",
                    "robust-nostrict", "robust-nocoplanar", "robust-nosnap"]
 TARGETS = ["sphere", "torus", "cylinder", "box"]
 NUM = {"seed", "gaussians", "object_gaussians", "level", "width", "height", "n_train", "n_eval", "miou", "macc",
@@ -78,7 +78,7 @@ def label(key):
             "vcar:robust-band": "robust + band (R1)", "vcar:robust-noocc": "robust - fine occlusion (R3)",
             "vcar:robust-nor3": "robust - occlusion test (R3, and R10)",
             "vcar:robust-nokeep": "robust - keep unseen (R4)", "vcar:robust-nolowpass": "robust - ABR low-pass",
-            "vcar:robust-tau08": "robust, tau_fine 0.8 (R6d off)", "vcar:robust-tau07": "robust, tau_fine 0.7 (before R6d)", "vcar:robust-nofs": "robust - foreshortening (R5)",
+            "vcar:robust-novalley": "robust, tau_fine 0.8 (R14 off)", "vcar:robust-tau07": "robust, tau_fine 0.7 (before R6d)", "vcar:robust-nofs": "robust - foreshortening (R5)",
             "vcar:robust-noundershoot": "robust - undershoot band (R6)",
             "vcar:robust-nostrict": "robust - decisive threshold (R7)",
             "vcar:robust-noabru": "robust - undershoot ABR (R8)",

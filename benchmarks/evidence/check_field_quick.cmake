@@ -2,10 +2,9 @@
 # and grabcut when GRABCUT is ON) on the forward rig, seed 1 (role tuning), target donut, with
 # 3D F1, mIoU and the masks' 2D IoU in [0, 1]; and guards the VCAR rows' 3D F1: each at least
 # its value measured minus 0.02 (the paper preset on 2026-12-02, x86-64, AVX-512; the default
-# on 2026-12-04, AVX2, with the spiral from -10 degrees), the default at least the paper
-# preset's with the honest oracle's masks, and at most 0.01 below it with GrabCut's (issue 47's
-# bar is 0.005 on the held-out seeds at full size; here, seed 1 at the quick size, it measures
-# 0.991 against 0.993).
+# on 2026-12-06, AVX2, with Eq. R14), the default at least the paper preset's with the honest
+# oracle's masks, and at most 0.005 below it with GrabCut's (issue 47's bar; here, seed 1 at the
+# quick size, it measures 0.9935 against 0.9933).
 #   cmake -DBENCH=<bench_field> -DOUT=<dir> [-DGRABCUT=ON] -P check_field_quick.cmake
 if(NOT BENCH OR NOT OUT)
   message(FATAL_ERROR "usage: cmake -DBENCH=<bench_field> -DOUT=<dir> [-DGRABCUT=ON] -P check_field_quick.cmake")
@@ -64,9 +63,9 @@ foreach(seg ${segmenters})
 endforeach()
 # The guards (3D F1 measured minus 0.02).
 set(floor_oracle_paper 0.835)   # measured 0.855
-set(floor_oracle_robust 0.914)  # measured 0.934 (2026-12-04)
+set(floor_oracle_robust 0.963)  # measured 0.983 (2026-12-06)
 set(floor_grabcut_paper 0.973)  # measured 0.993
-set(floor_grabcut_robust 0.971) # measured 0.991 (2026-12-04)
+set(floor_grabcut_robust 0.974) # measured 0.994 (2026-12-06)
 foreach(seg ${segmenters})
   foreach(v paper robust)
     if(f1_${seg}_${v} LESS floor_${seg}_${v})
@@ -89,8 +88,8 @@ if(GRABCUT)
   thousandths("${f1_grabcut_paper}" paper_k)
   thousandths("${f1_grabcut_robust}" robust_k)
   math(EXPR gap "${paper_k} - ${robust_k}")
-  if(gap GREATER 10)
-    message(FATAL_ERROR "the default (${f1_grabcut_robust}) more than 0.01 below the paper preset (${f1_grabcut_paper}) with GrabCut's masks")
+  if(gap GREATER 5)
+    message(FATAL_ERROR "the default (${f1_grabcut_robust}) more than 0.005 below the paper preset (${f1_grabcut_paper}) with GrabCut's masks")
   endif()
 endif()
 message(STATUS "field quick: ${n} lines, every segmenter x method present; 3D F1 oracle paper ${f1_oracle_paper} "

@@ -256,8 +256,8 @@ std::string summary_text(const Diagnostics& d, const VcarParams& p, std::size_t 
   if (!p.enable_abr) std::snprintf(buf, sizeof buf, "ABR       off (enable_abr=false)\n");
   else std::snprintf(buf, sizeof buf, "ABR       %zu Gaussians flagged, %zu compressed\n", d.abr_flagged, d.abr_compressed);
   s += buf;
-  if (d.tau_fine_applied > 0.f && p.strict.tau > p.tau_fine) {  // Eq. R7 (and R8) ran
-    std::snprintf(buf, sizeof buf, "fine vote %s: tau %.2f", d.tau_fine_applied < p.strict.tau ? "split" : "decisive",
+  if (d.tau_fine_applied > 0.f && (p.strict.tau > p.tau_fine || p.valley.enabled)) {  // Eq. R7 or R14 (and R8) ran
+    std::snprintf(buf, sizeof buf, "fine vote %s: tau %.2f", d.fine_split ? "split" : "decisive",
                   static_cast<double>(d.tau_fine_applied));
     s += buf;
     if (d.undershoot_applied) s += ", undershoot band on (Eq. R6)";

@@ -73,9 +73,9 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
   const auto r = VcarParams::robust();
   CHECK(r.evidence.occlusion);
   CHECK(r.reliability.enabled);      // R13
-  CHECK(r.tau_fine == VcarParams::nvos().tau_fine);  // the paper's, unless the masks undershoot
+  CHECK(r.tau_fine == VcarParams::nvos().tau_fine);  // the paper's, where R14 is off
   CHECK(r.undershoot.band > 0.f);
-  CHECK(r.undershoot.tau == 0.7f);                    // R6d
+  CHECK(r.valley.enabled);                            // R14
   CHECK(r.strict.tau > r.tau_fine);
   CHECK(r.abr_lowpass);  // as the paper; R8 reads own footprints after a split vote
   CHECK(r.snap.enabled);                  // R11-R12
@@ -88,7 +88,6 @@ TEST_CASE("the robust preset (docs/robust.md) switches on each mechanism beyond 
     CHECK_FALSE(p.robust_vote());
     CHECK_FALSE(p.reliability.enabled);
     CHECK(p.undershoot.band == 0.f);
-    CHECK(p.undershoot.tau == 0.f);
     CHECK(p.strict.tau <= p.tau_fine);  // Eq. R7 off
     CHECK_FALSE(p.valley.enabled);      // Eq. R14 off
     CHECK(p.abr_lowpass);

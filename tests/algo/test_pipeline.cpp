@@ -392,35 +392,32 @@ TEST_CASE("Eq. R8: ABR reads the training masks widened by their undershoot only
     return vcar::segment(w.scene, cams, prompt, renderer, seg, p).diagnostics;
   };
   // Masks 5 px inside the render: blob A's rim falls outside them in every view, the vote splits.
-  // Eq. R6d: their median undershoot is positive, so the round's threshold is undershoot.tau.
-  const vcar::Diagnostics eroded = run(5);
-  REQUIRE(eroded.tau_fine_applied == p.undershoot.tau);
-  p.undershoot.tau = 0.6f;
-  CHECK(run(5).tau_fine_applied == 0.6f);
-  // R6d off: R7 weighs tau_strict against tau_fine (0.8), and against 0.8 these masks' vote is
-  // decisive (the rim sits between 0.7 and 0.8).
-  p.undershoot.tau = 0.f;
-  CHECK(run(5).tau_fine_applied == p.strict.tau);
-  p.undershoot.tau = vcar::VcarParams::robust().undershoot.tau;
-  // Eq. R14 on: the split vote of eroded masks takes the valley of its ratios instead of R6d's
-  // threshold (a bin centre at or above tau_coarse); a decisive vote keeps R7's strict one.
-  p.valley.enabled = true;
+  // Eq. R14: the round's threshold is the valley of its ratios (a bin centre at or above
+  // tau_coarse); here the rim's ratios spread below tau_fine with nothing else in G_coarse, so
+  // the valley lies below it, and R7 finds the vote split against it.
   const auto bin_centre = [&](float t) { return std::abs(t * 20.f - 0.5f - std::round(t * 20.f - 0.5f)) < 1e-4f; };
-  const vcar::Diagnostics valley5 = run(5);
-  INFO("R14 on eroded masks: " << valley5.tau_fine_applied);
-  CHECK(bin_centre(valley5.tau_fine_applied));
-  CHECK(valley5.tau_fine_applied >= p.tau_coarse);
-  // Here the rim's ratios spread below 0.7 with nothing else in G_coarse: the valley is lower,
-  // and the same reading of the vote at a lower threshold keeps a superset.
-  CHECK(valley5.tau_fine_applied < p.undershoot.tau);
-  CHECK(valley5.n_fine > eroded.n_fine);
+  const vcar::Diagnostics eroded = run(5);
+  INFO("R14 on eroded masks: " << eroded.tau_fine_applied);
+  REQUIRE(bin_centre(eroded.tau_fine_applied));
+  CHECK(eroded.tau_fine_applied >= p.tau_coarse);
+  CHECK(eroded.tau_fine_applied < p.tau_fine);
+  // R14 off: R7 weighs tau_strict against tau_fine (0.8), and against 0.8 these masks' vote is
+  // decisive (the rim sits below 0.8): the strict threshold, and fewer of the object kept.
+  p.valley.enabled = false;
+  const vcar::Diagnostics no_valley = run(5);
+  CHECK(no_valley.tau_fine_applied == p.strict.tau);
+  CHECK(eroded.n_fine > no_valley.n_fine);
+  p.valley.enabled = true;
+  // Exact masks: the vote is decisive against its valley, R7's strict threshold.
   CHECK(run(0).tau_fine_applied == p.strict.tau);
-  // R7 off: R14 decides every fine vote, the decisive one of exact masks too.
+  // R7 off: the eroded masks' vote keeps its valley; the exact masks measure no undershoot
+  // (R14's gate: their median e_j is 0), so their round keeps tau_fine.
   p.strict.tau = 0.f;
-  const float valley0 = run(0).tau_fine_applied;
-  INFO("R14 on exact masks: " << valley0);
-  CHECK(bin_centre(valley0));
-  CHECK(valley0 >= p.tau_coarse);
+  CHECK(run(5).tau_fine_applied == eroded.tau_fine_applied);
+  CHECK(run(0).tau_fine_applied == p.tau_fine);
+  // Without R6a (R6 off) the gate never opens: the eroded masks' round is read at tau_fine.
+  p.undershoot.band = 0.f;
+  CHECK(run(5).tau_fine_applied == p.tau_fine);
   p = vcar::VcarParams::robust();
   p.force_fine_round = true;
   p.phi_s_deg = vcar::VcarParams::nvos().phi_s_deg;

@@ -143,17 +143,16 @@ TEST_CASE("Eq. R8 by hand: the mask grows by every background pixel within e (Eu
   CHECK(e(2, 2) == 0);    // sqrt 18 > 3
 }
 
-TEST_CASE("Eq. R6d by hand: the fine threshold is tau_under when the median undershoot is positive") {
-  using vcar::undershoot_threshold;
-  // Odd count: the middle value decides. {0, 0, 2}: median 0, the paper's tau_fine.
-  CHECK(undershoot_threshold({0.0, 2.0, 0.0}, 0.8f, 0.7f) == 0.8f);
+TEST_CASE("Eq. R14's gate by hand: the round's masks undershoot when their median undershoot is positive") {
+  using vcar::masks_undershoot;
+  // Odd count: the middle value decides. {0, 0, 2}: median 0.
+  CHECK_FALSE(masks_undershoot({0.0, 2.0, 0.0}));
   // {0, 0.4, 3}: median 0.4 > 0.
-  CHECK(undershoot_threshold({3.0, 0.0, 0.4}, 0.8f, 0.7f) == 0.7f);
+  CHECK(masks_undershoot({3.0, 0.0, 0.4}));
   // Even count: the mean of the two middle values; {0, 0, 1, 5}: (0 + 1) / 2 = 0.5 > 0.
-  CHECK(undershoot_threshold({5.0, 0.0, 1.0, 0.0}, 0.8f, 0.7f) == 0.7f);
+  CHECK(masks_undershoot({5.0, 0.0, 1.0, 0.0}));
   // {0, 0, 0, 5}: (0 + 0) / 2 = 0.
-  CHECK(undershoot_threshold({0.0, 5.0, 0.0, 0.0}, 0.8f, 0.7f) == 0.8f);
-  // No masked frame, or R6d off (tau_under 0): tau_fine.
-  CHECK(undershoot_threshold({}, 0.8f, 0.7f) == 0.8f);
-  CHECK(undershoot_threshold({3.0, 4.0}, 0.8f, 0.f) == 0.8f);
+  CHECK_FALSE(masks_undershoot({0.0, 5.0, 0.0, 0.0}));
+  // No masked frame.
+  CHECK_FALSE(masks_undershoot({}));
 }

@@ -44,6 +44,13 @@ TEST_CASE("set_parameter(key, value) parses every kind of field and rejects unkn
       CHECK(std::string(e.what()).find("'snap'") != std::string::npos);
     }
   }
+  // R6d's threshold, replaced by Eq. R14, names its successor.
+  try {
+    vcar::io::set_parameter(p, "undershoot_tau", "0.7");
+    FAIL("expected an error");
+  } catch (const vcar::Error& e) {
+    CHECK(std::string(e.what()).find("'valley'") != std::string::npos);
+  }
   // Every field is reachable by its own name, and names are unique.
   std::set<std::string> names;
   std::size_t count = 0;

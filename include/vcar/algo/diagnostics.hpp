@@ -26,8 +26,9 @@ struct Diagnostics {
   double max_gap_deg = 0;           // Delta_max (Eq. 6)
   Eigen::Vector3f gap_direction = Eigen::Vector3f::Zero();
   bool sss_triggered = false;
-  float tau_fine_applied = 0.f;     // the fine round's threshold (Eq. R6d-R7: tau_fine, undershoot.tau or tau_strict); 0: no fine round
+  float tau_fine_applied = 0.f;     // the fine round's threshold (Eq. 3, R14, R7: tau_fine, the vote's valley or tau_strict); 0: no fine round
   bool undershoot_applied = false;  // Eq. R6 shaped the fine vote (on, and its gate R6c found the vote without it split)
+  bool fine_split = false;          // the fine vote read as split (Eq. R7 found it so, or R14's threshold < tau_fine): R8 on, R10 off
   std::vector<Camera> sampled_cameras;  // V_sampled
   ObjectSphere sphere{};
   std::size_t abr_flagged = 0, abr_compressed = 0;
@@ -55,6 +56,7 @@ struct Diagnostics {
     f("sss_triggered", "sss_triggered", d.sss_triggered);
     f("tau_fine_applied", "tau_fine_applied", d.tau_fine_applied);
     f("undershoot_applied", "undershoot_applied", d.undershoot_applied);
+    f("fine_split", "fine_split", d.fine_split);
     f("sampled_cameras", "sampled_positions", d.sampled_cameras);
     f("sphere", "sphere", d.sphere);
     f("abr_flagged", "abr.flagged", d.abr_flagged);

@@ -199,28 +199,23 @@ public:
     if (m) round_undershoot_.push_back(fine_->last_undershoot_px());
   }
 
-  // After the round: its timings (render, segmenter, voting) and the fine selection (Eq. 3, R7, or R14).
+  // After the round: its timings (render, segmenter, voting) and the fine selection (Eq. 3, R14, R7).
   bool end_round(double render_s, double segment_s, double voting_s) {
     timing("fine_render", render_s);
     timing("fine_segment", segment_s);
     timing("fine_voting", voting_s);
     diag_.overshoot_eroded += fine_->overshoot_eroded();
-    const float tau = params_.undershoot.band > 0.f  // Eq. R6d
-                          ? undershoot_threshold(std::move(round_undershoot_), params_.tau_fine, params_.undershoot.tau)
-                          : params_.tau_fine;
-    fine_->weigh_views(tau);  // Eq. R13
-    verdict_ = fine_->selected(tau, params_.strict.tau, split_fraction, selected_, scores_);
-    // Eq. R14 where R7 is off or finds the vote split: the threshold at the vote's valley.
-    if (params_.valley.enabled && !(params_.strict.tau > tau && verdict_.tau == params_.strict.tau)) {
-      std::vector<Index> all;
-      fine_->selected(0.f, all, scores_, verdict_.undershoot);
-      const float t = vote_valley(scores_, params_.tau_coarse);  // Eq. R14
-      fine_->selected(t, selected_, scores_, verdict_.undershoot);
-      verdict_.tau = t;
-      verdict_.split = verdict_.split || t < params_.tau_fine;
+    fine_->weigh_views(params_.tau_fine);  // Eq. R13
+    float tau = params_.tau_fine;
+    if (params_.valley.enabled && masks_undershoot(std::move(round_undershoot_))) {  // Eq. R14's gate (R6a)
+      fine_->ratios(scores_);
+      tau = vote_valley(scores_, params_.tau_coarse);  // Eq. R14
     }
+    verdict_ = fine_->selected(tau, params_.strict.tau, split_fraction, selected_, scores_);  // Eq. 3, R7
+    verdict_.split = verdict_.split || (verdict_.tau == tau && tau < params_.tau_fine);
     diag_.tau_fine_applied = verdict_.tau;
     diag_.undershoot_applied = verdict_.undershoot;
+    diag_.fine_split = verdict_.split;
     diag_.n_fine = diag_.n_final = selected_.size();
     fine_.reset();
     if (selected_.empty()) {
@@ -277,7 +272,7 @@ private:
   Diagnostics& diag_;
   std::vector<std::size_t> order_;  // frame k of a round -> training view
   std::vector<double> undershoot_;  // Eq. R6a of each training view's fine-round mask (px)
-  std::vector<double> round_undershoot_;  // Eq. R6a of every masked fine frame (px), for R6d
+  std::vector<double> round_undershoot_;  // Eq. R6a of every masked fine frame (px), for R14's gate
   FineVerdict verdict_;             // the fine vote's (Eq. R7, R6c); none without a fine round
   std::vector<Index> coarse_set_;   // G_coarse, the fine round's renders
   std::vector<Camera> fine_frames_;

@@ -92,28 +92,27 @@ struct VcarParams {
   // measured against the render of G_coarse (R6a); R6c: only where the vote without it is split
   // (Eq. R7), so a decisive vote without it is the result. R8: when the fine vote is split, ABR
   // reads each training view's mask widened by e_j, and the Gaussians' own footprints (no
-  // low-pass). R6c and R8 need R7. R6d: the fine round's threshold is tau (in place of
-  // tau_fine) when the median e_j of its masked frames is positive (0 = off; it reads R6a, so
-  // it acts only where band > 0).
+  // low-pass). R6c and R8 need R7.
   struct Undershoot {
     float band = 0.f;
-    float tau = 0.f;
   } undershoot;
-  // Eq. R7, the strict threshold: the fine round keeps tau instead of its threshold (tau_fine, or
-  // R6d's undershoot.tau) when the vote is decisive, i.e. when at most a fraction 0.1
-  // (split_fraction, decisive_threshold.hpp) of the Gaussians kept at that threshold fall below
-  // tau, for the candidates seen unoccluded in at least a fifth of their views (seen_fraction);
-  // tau <= that threshold (0) = off.
-  struct Strict {
-    float tau = 0.f;
-  } strict;
-  // Eq. R14, the fine threshold at the emptiest bin of the fine vote's ratio histogram between
-  // tau_coarse and its fullest bin (vote_valley.hpp), in place of tau_fine and R6d's threshold
-  // where R7 finds the vote split or is off (tau_strict = 0: R14 always); R8 and R10 read the
-  // vote as split there, or where that threshold is below tau_fine. Off in every preset.
+  // Eq. R14, the fine round's threshold read from its own vote where the round's masks
+  // measurably undershoot (the median of R6a's e_j over its masked frames is positive; R6a runs
+  // where undershoot.band > 0): the emptiest bin of the fine vote's ratio histogram between
+  // tau_coarse and its fullest bin (vote_valley.hpp), in place of tau_fine; R8 and R10 read the
+  // vote as split where R14's threshold is applied below tau_fine. robust: on (it replaced R6d's
+  // fixed 0.7 on 2026-12-06).
   struct Valley {
     bool enabled = false;
   } valley;
+  // Eq. R7, the strict threshold: the fine round keeps tau instead of its threshold (tau_fine, or
+  // R14's) when the vote is decisive, i.e. when at most a fraction 0.1 (split_fraction,
+  // decisive_threshold.hpp) of the Gaussians kept at that threshold fall below tau, for the
+  // candidates seen unoccluded in at least a fifth of their views (seen_fraction); tau <= that
+  // threshold (0) = off.
+  struct Strict {
+    float tau = 0.f;
+  } strict;
   // Eq. R10: a fine candidate that no training view sees (the coarse round's occlusion test) is
   // background when more seen background Gaussians than seen selected ones lie on its plane
   // within radius D (D the selection's extent): normals within 5 degrees, plane distance within
@@ -174,8 +173,8 @@ struct VcarParams {
   // vcar's default (beyond the paper, docs/robust.md): the paper's thresholds (tau_coarse 0.5,
   // tau_fine 0.8), the evidence levels (R2) with the occlusion test in both rounds (R3), the fine
   // round's band as wide as the masks' measured undershoot (R6) where the vote without it splits
-  // (R6c), the fine threshold 0.7 where the round's masks undershoot (R6d), the strict threshold
-  // 0.85 when the fine vote is decisive (R7), ABR on masks widened by their undershoot when it is
+  // (R6c), the fine threshold at the valley of the fine vote's ratios (R14), the strict threshold
+  // 0.85 when the fine vote is decisive against it (R7), ABR on masks widened by their undershoot when it is
   // split, on their own footprints (R8), hidden candidates on a seen background plane dropped
   // (R10), each mask snapped to the render's occlusion edges where three quarters of its contour
   // agree: eroded where it reaches 1 px or more past them (R11), grown to them where it stops
@@ -183,19 +182,17 @@ struct VcarParams {
   // the spiral's elevations from -10 degrees, the released code's lowest, not the paper's -60
   // (below the floor the piece of it in G_coarse hides the object's underside from the
   // segmenter: docs/notes/field-spiral-2026-12-04.md). What vcar::segment uses when given no
-  // parameters. Chosen on the field's tuning seed and the synthetic suite
-  // (docs/notes/default-2026-12-02.md; R6d on ISNet's guitar, the snap's
-  // conditions on SAM-like drift, docs/notes/default-2026-12-03.md): 0.7 where masks undershoot
-  // (0.5 let GrabCut's leaks through, 0.8 lost eroded masks' rims), the paper's 0.8 where they
-  // do not (ISNet's guitar, whose masks take in a neighbour's piece), R13 on (SAM-like drift).
-  // (R1, R4, R5 and R9 were removed: inert in every preset, or never better on the field;
-  // docs/robust.md, appendix.)
+  // parameters. Chosen on the field's tuning seeds and the synthetic suite
+  // (docs/notes/default-2026-12-02.md; the snap's conditions on SAM-like drift,
+  // docs/notes/default-2026-12-03.md; R14, docs/notes/field-valley-2026-12-06.md), R13 on
+  // (SAM-like drift). (R1, R4, R5, R9 and R6d were removed: inert in every preset, never better
+  // on the field, or replaced; docs/robust.md, appendix.)
   static VcarParams robust() {
     VcarParams p;
     p.phi_s_deg = -10.f;  // Eq. 7's first elevation: the released code's lowest
     p.evidence.occlusion = true;
     p.undershoot.band = 1.5f;
-    p.undershoot.tau = 0.7f;
+    p.valley.enabled = true;
     p.strict.tau = 0.85f;
     p.coplanar.radius = 0.75f;
     p.snap.enabled = true;
@@ -245,8 +242,8 @@ struct VcarParams {
     f("min_frame_content", p.min_frame_content); f("min_mask_fraction", p.min_mask_fraction);
     f("force_fine_round", p.force_fine_round);
     f("occlusion", p.evidence.occlusion); f("kappa", p.evidence.kappa);
-    f("undershoot_band", p.undershoot.band); f("undershoot_tau", p.undershoot.tau);
-    f("tau_strict", p.strict.tau); f("valley", p.valley.enabled); f("abr_lowpass", p.abr_lowpass);
+    f("undershoot_band", p.undershoot.band); f("valley", p.valley.enabled);
+    f("tau_strict", p.strict.tau); f("abr_lowpass", p.abr_lowpass);
     f("coplanar_radius", p.coplanar.radius); f("snap", p.snap.enabled);
     f("view_reliability", p.reliability.enabled);
   }
@@ -287,7 +284,6 @@ struct VcarParams {
     if (!(evidence.kappa >= 0.f && std::isfinite(evidence.kappa))) bad("kappa", "must be >= 0, got " + std::to_string(evidence.kappa));
     if (!(undershoot.band >= 0.f && undershoot.band <= 100.f))
       bad("undershoot_band", "must be in [0, 100] (0 = off), got " + std::to_string(undershoot.band));
-    unit("undershoot_tau", undershoot.tau);
     unit("tau_strict", strict.tau);
     if (!(coplanar.radius >= 0.f && coplanar.radius <= 10.f))
       bad("coplanar_radius", "must be in [0, 10] (0 = off), got " + std::to_string(coplanar.radius));

@@ -94,6 +94,12 @@ public:
     if (robust_) return robust_->selected(tau, indices, scores, undershoot);
     paper_->selected(tau, indices, scores);
   }
+  // Every candidate's ratio (Eq. 3, or Eq. R2-R6 with R6), in candidate order: Eq. R14's histogram.
+  void ratios(std::vector<float>& out) const {
+    const std::size_t n = robust_ ? robust_->size() : paper_->size();
+    out.resize(n);
+    for (std::size_t k = 0; k < n; ++k) out[k] = robust_ ? robust_->ratio(k) : paper_->ratio(k);
+  }
   // The same with Eq. R7 choosing between tau and tau_strict (> tau; else tau): the verdict.
   // With R6's gate, R7 reads the vote without R6 first: when that vote is decisive it is the
   // result; when it splits, the vote with R6 decides as above (Eq. R6c).

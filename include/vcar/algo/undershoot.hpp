@@ -20,13 +20,6 @@
 // undershooting masks do), ABR (Eq. 9-14) reads each training view's mask widened by its e_j:
 //   M'_j = M_j  union  {p : dist(p, M_j) <= e_j}                                    (Eq. R8)
 // so a rim Gaussian whose ellipse reaches past an eroded mask is not shrunk for the erosion.
-//
-// Eroded masks leave the object's rim at intermediate ratios R_i, which the paper's tau_fine
-// rejects; masks that take in a neighbour in some views and not in others do too, and there a
-// lower threshold keeps the neighbour. The round's median undershoot tells the two apart:
-//   tau_u = tau_under   if median over the round's masked frames of e_j > 0       (Eq. R6d)
-//   tau_u = tau_fine    otherwise
-// and tau_u is the fine round's threshold (R7 then chooses between it and tau_strict).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -90,15 +83,15 @@ inline double undershoot_px(const Mask& m, const ImageF& alpha, int window = und
   });
 }
 
-// Eq. R6d: the fine threshold from the round's undershoots e (px, one per masked frame):
-// tau_under (> 0) when their median is positive, else tau_fine.
-inline float undershoot_threshold(std::vector<double> e, float tau_fine, float tau_under) {
-  if (!(tau_under > 0.f) || e.empty()) return tau_fine;
+// Eq. R14's gate: true when the median of the round's undershoots e (px, Eq. R6a, one per
+// masked frame) is positive, i.e. the round's masks measurably undershoot.
+inline bool masks_undershoot(std::vector<double> e) {
+  if (e.empty()) return false;
   const auto mid = e.begin() + static_cast<std::ptrdiff_t>(e.size() / 2);
   std::nth_element(e.begin(), mid, e.end());
   double median = *mid;
   if (e.size() % 2 == 0) median = 0.5 * (median + *std::max_element(e.begin(), mid));
-  return median > 0.0 ? tau_under : tau_fine;
+  return median > 0.0;
 }
 
 namespace detail {  // vcar::detail

@@ -15,7 +15,12 @@
 //   m    = argmax_{b >= b_0} h_b                        (ties: the lowest b)
 //   tau* = tau_coarse                                   if m = b_0
 //   tau* = (v + 1/2) w,  v = argmin_{b_0 <= b < m} s_b  (ties: the lowest b)   otherwise
-// and the fine round keeps R_i >= tau*. A bin at the valley's centre splits it: the histogram
+// and the fine round keeps R_i >= tau*, or R7's strict threshold where the vote is decisive
+// against tau* (decisive_threshold.hpp). Only where the round's masks measurably undershoot
+// (masks_undershoot, undershoot.hpp): a neighbour that masks take in on some frames and not on
+// others spreads its ratios up to the object's spike as an undershoot spreads the object's own,
+// and only the masks' measured undershoot tells the two apart (ISNet's guitar,
+// docs/notes/field-valley-2026-12-06.md). A bin at the valley's centre splits it: the histogram
 // cannot place the threshold more finely than its bins. O(candidates) once.
 #include <algorithm>
 #include <array>

@@ -121,6 +121,9 @@ inline void set_parameter(VcarParams& p, std::string_view key, std::string_view 
       if (key == merged)
         throw Error("'" + std::string(key) + "' is now part of 'snap' (true/false: Eq. R11-R12 together, "
                     "docs/robust.md)", "--set");
+    if (key == "undershoot_tau")  // until 2026-12-06
+      throw Error("'undershoot_tau' (Eq. R6d) was replaced by 'valley' (true/false: the fine threshold at the fine "
+                  "vote's valley, Eq. R14, docs/robust.md)", "--set");
     throw Error("unknown parameter '" + std::string(key) + "'; valid keys: " + parameter_keys(), "--set");
   }
 }
