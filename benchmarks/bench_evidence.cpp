@@ -172,7 +172,10 @@ VcarParams vcar_params(const std::string& variant, const Experiment& e, const st
     }
     else if (variant == "robust-nolowpass") p.abr_lowpass = false;
     else if (variant == "robust-novalley") p.valley.enabled = false;  // Eq. R14 off: tau_fine 0.8
-    else if (variant == "robust-tau07") p.valley.enabled = false, p.tau_fine = 0.7f;  // always 0.7 (before R6d)
+    else if (variant == "robust-tau07") {  // R14 off, always 0.7 (before R6d)
+      p.valley.enabled = false;
+      p.tau_fine = 0.7f;
+    }
     else if (variant == "robust-noundershoot") p.undershoot.band = 0.f;
     else if (variant == "robust-nostrict") p.strict.tau = 0.f;
     else if (variant == "robust-nocoplanar") p.coplanar.radius = 0.f;

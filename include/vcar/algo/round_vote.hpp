@@ -96,9 +96,9 @@ public:
   }
   // Every candidate's ratio (Eq. 3, or Eq. R2-R6 with R6), in candidate order: Eq. R14's histogram.
   void ratios(std::vector<float>& out) const {
-    const std::size_t n = robust_ ? robust_->size() : paper_->size();
-    out.resize(n);
-    for (std::size_t k = 0; k < n; ++k) out[k] = robust_ ? robust_->ratio(k) : paper_->ratio(k);
+    out.resize(robust_ ? robust_->size() : paper_->size());
+    if (robust_) for (std::size_t k = 0; k < out.size(); ++k) out[k] = robust_->ratio(k);
+    else for (std::size_t k = 0; k < out.size(); ++k) out[k] = paper_->ratio(k);
   }
   // The same with Eq. R7 choosing between tau and tau_strict (> tau; else tau): the verdict.
   // With R6's gate, R7 reads the vote without R6 first: when that vote is decisive it is the
