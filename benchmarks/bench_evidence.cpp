@@ -137,7 +137,7 @@ const std::vector<std::string> kVariants = {"coarse", "sss", "abr", "full", "occ
 // The robust preset with one mechanism changed each (docs/robust.md ablation).
 const std::vector<std::string> kRobustAblation = {"robust-nor3", "robust-nolowpass", "robust-novalley", "robust-tau07",
                                                   "robust-noundershoot", "robust-nostrict",
-                                                  "robust-nocoplanar", "robust-nosnap"};
+                                                  "robust-nosnap"};
 
 std::vector<std::string> all_methods(bool variants = true) {
   std::vector<std::string> m = kPeers;
@@ -166,10 +166,7 @@ synth::OracleParams oracle_for(const Experiment& e) {
 VcarParams vcar_params(const std::string& variant, const Experiment& e, const std::vector<std::string>& set) {
   if (variant.rfind("robust", 0) == 0) {  // one preset for every rig: the library's default
     VcarParams p = VcarParams::robust();
-    if (variant == "robust-nor3") {  // R3 in both rounds, and R10, which reads it
-      p.evidence.occlusion = false;
-      p.coplanar.radius = 0.f;
-    }
+    if (variant == "robust-nor3") p.evidence.occlusion = false;  // R3 in both rounds
     else if (variant == "robust-nolowpass") p.abr_lowpass = false;
     else if (variant == "robust-novalley") p.valley.enabled = false;  // Eq. R14 off: tau_fine 0.8
     else if (variant == "robust-tau07") {  // R14 off, always 0.7 (before R6d)
@@ -178,7 +175,6 @@ VcarParams vcar_params(const std::string& variant, const Experiment& e, const st
     }
     else if (variant == "robust-noundershoot") p.undershoot.band = 0.f;
     else if (variant == "robust-nostrict") p.strict.tau = 0.f;
-    else if (variant == "robust-nocoplanar") p.coplanar.radius = 0.f;
     else if (variant == "robust-nosnap") p.snap.enabled = false;
     else if (variant != "robust") throw Error("unknown variant '" + variant + "'", "--methods");
     if (e.failure == "tau") { p.tau_coarse = static_cast<float>(e.level); p.tau_fine = static_cast<float>(e.level); }

@@ -25,7 +25,7 @@ RIGS = ["forward", "orbit", "sparse", "hemisphere"]
 PEERS = ["naive", "sagd", "flashsplat", "gaussiancut", "ludvig", "lbg"]
 VARIANTS = ["coarse", "sss", "abr", "full", "occlusion", "gapdir", "robust"]
 ROBUST_ABLATION = ["robust-nor3", "robust-nolowpass", "robust-novalley", "robust-tau07", "robust-noundershoot",
-                   "robust-nostrict", "robust-nocoplanar", "robust-nosnap"]
+                   "robust-nostrict", "robust-nosnap"]
 TARGETS = ["sphere", "torus", "cylinder", "box"]
 NUM = {"seed", "gaussians", "object_gaussians", "level", "width", "height", "n_train", "n_eval", "miou", "macc",
        "miou_01", "macc_01", "boundary_iou", "boundary_f1", "trimap_iou", "f1_3d", "precision_3d", "recall_3d",

@@ -276,11 +276,6 @@ std::string summary_text(const Diagnostics& d, const VcarParams& p, std::size_t 
     std::snprintf(buf, sizeof buf, "undershoot %zu masks grown to the render's occlusion edges (Eq. R12)\n", d.masks_grown);
     s += buf;
   }
-  if (p.coplanar.radius > 0.f && d.coplanar_dropped > 0) {  // Eq. R10 ran
-    std::snprintf(buf, sizeof buf, "hidden    %zu Gaussians dropped: unseen, on a seen background plane (Eq. R10)\n",
-                  d.coplanar_dropped);
-    s += buf;
-  }
   if (masks) {
     std::snprintf(buf, sizeof buf, "masks     %zu of %zu training views missing", masks->training_missing, masks->training);
     s += buf;

@@ -292,7 +292,6 @@ TEST_CASE("RenderNeed: a fine round that reads alpha only (Eq. R6 alone) keeps i
   });
   auto p = vcar::VcarParams::robust();  // R6 on; every mechanism that reads depth off
   p.evidence.occlusion = false;
-  p.coplanar.radius = 0.f;
   p.snap.enabled = false;
   vcar::Prompt prompt;
   prompt.reference_view = 4;

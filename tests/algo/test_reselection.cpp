@@ -189,7 +189,7 @@ TEST_CASE("Reselection's incremental ABR equals vcar::segment over a random sequ
 }
 
 TEST_CASE("Reselection with the default preset equals vcar::segment with the same masks and SSS off") {
-  // The default's coarse round reads renders (Eq. R3, R10-R12) and weighs views (R13): the
+  // The default's coarse round reads renders (Eq. R3, R11-R12) and weighs views (R13): the
   // renderer's alpha and depth are kept, each mask is edited (R11, R12) when set, and select()
   // votes again. One mask dilated by 4 px (R11 erodes it), one eroded by 3 px (R12 may grow it).
   const Fixture f = fixture();
@@ -207,7 +207,6 @@ TEST_CASE("Reselection with the default preset equals vcar::segment with the sam
     CHECK(a.log_scale == b.log_scale);
     CHECK(a.diagnostics.overshoot_eroded == b.diagnostics.overshoot_eroded);
     CHECK(a.diagnostics.masks_grown == b.diagnostics.masks_grown);
-    CHECK(a.diagnostics.coplanar_dropped == b.diagnostics.coplanar_dropped);
     CHECK(a.diagnostics.abr_compressed == b.diagnostics.abr_compressed);
   };
   const vcar::SegmentationResult all = r.select();

@@ -13,7 +13,7 @@ TEST_CASE("diagnostics_json: every field at its report.json key, by hand") {
   d.sampled_cameras = {vcar::Camera::look_at({1, 2, 3}, {0, 0, 0}, {0, 0, 1}, k, "s0")};
   d.sphere.c = {1.f, 2.f, 3.f}; d.sphere.r = 0.5f; d.sphere.inliers = 38;
   d.abr_flagged = 9; d.abr_compressed = 8; d.abr_retraced = 2; d.abr_masks_widened = 1;
-  d.coplanar_dropped = 3; d.overshoot_eroded = 4; d.masks_grown = 5; d.masks_missing = 6;
+  d.overshoot_eroded = 4; d.masks_grown = 5; d.masks_missing = 6;
   d.mask_store_bytes = 1234; d.note = "n";
   d.timings_s = {{"coarse_voting", 0.25}, {"abr", 0.5}};
   const nlohmann::json j = vcar::io::diagnostics_json(d);
@@ -32,16 +32,15 @@ TEST_CASE("diagnostics_json: every field at its report.json key, by hand") {
   CHECK(j["sphere"]["radius"] == 0.5);
   CHECK(j["sphere"]["inliers"] == 38);
   CHECK(j["abr"] == nlohmann::json({{"flagged", 9}, {"compressed", 8}, {"retraced", 2}, {"masks_widened", 1}}));
-  CHECK(j["coplanar_dropped"] == 3);
   CHECK(j["overshoot_eroded"] == 4);
   CHECK(j["masks_grown"] == 5);
   CHECK(j["masks_missing"] == 6);
   CHECK(j["mask_store_bytes"] == 1234);
   CHECK(j["note"] == "n");
   CHECK(j["timings_s"] == nlohmann::json({{"coarse_voting", 0.25}, {"abr", 0.5}}));
-  // Nothing else: 24 fields (4 under counts, 4 under abr) and sampled_views.
-  CHECK(j.size() == 24 - 4 - 4 + 2 + 1);
+  // Nothing else: 23 fields (4 under counts, 4 under abr) and sampled_views.
+  CHECK(j.size() == 23 - 4 - 4 + 2 + 1);
   int fields = 0;
   vcar::Diagnostics::for_each_field(d, [&](const char*, const char*, const auto&) { ++fields; });
-  CHECK(fields == 24);
+  CHECK(fields == 23);
 }

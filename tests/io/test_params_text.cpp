@@ -51,6 +51,14 @@ TEST_CASE("set_parameter(key, value) parses every kind of field and rejects unkn
   } catch (const vcar::Error& e) {
     CHECK(std::string(e.what()).find("'valley'") != std::string::npos);
   }
+  // Eq. R10's radius, removed, says so (not "unknown parameter").
+  try {
+    vcar::io::set_parameter(p, "coplanar_radius", "0.75");
+    FAIL("expected an error");
+  } catch (const vcar::Error& e) {
+    CHECK(std::string(e.what()).find("R10") != std::string::npos);
+    CHECK(std::string(e.what()).find("removed") != std::string::npos);
+  }
   // Every field is reachable by its own name, and names are unique.
   std::set<std::string> names;
   std::size_t count = 0;

@@ -28,13 +28,12 @@ struct Diagnostics {
   bool sss_triggered = false;
   float tau_fine_applied = 0.f;     // the fine round's threshold (Eq. 3, R14, R7: tau_fine, the vote's valley or tau_strict); 0: no fine round
   bool undershoot_applied = false;  // Eq. R6 shaped the fine vote (on, and its gate R6c found the vote without it split)
-  bool fine_split = false;          // the fine vote read as split (Eq. R7 found it so, or R14's threshold < tau_fine): R8 on, R10 off
+  bool fine_split = false;          // the fine vote read as split (Eq. R7 found it so, or R14's threshold < tau_fine): R8 on
   std::vector<Camera> sampled_cameras;  // V_sampled
   ObjectSphere sphere{};
   std::size_t abr_flagged = 0, abr_compressed = 0;
   std::size_t abr_retraced = 0;     // flagged candidates refined once more, alone (BoundaryRefinement::defer_tracing)
   std::size_t abr_masks_widened = 0; // training masks ABR read widened by their undershoot (Eq. R8)
-  std::size_t coplanar_dropped = 0;  // hidden candidates on a seen background plane, dropped (Eq. R10)
   std::size_t overshoot_eroded = 0;  // masks voted eroded by their measured overshoot (Eq. R11), every round
   std::size_t masks_grown = 0;       // coarse-round masks voted grown to the render's occlusion edges (Eq. R12)
   std::size_t masks_missing = 0;    // frames the segmenter answered with "no mask"
@@ -63,7 +62,6 @@ struct Diagnostics {
     f("abr_compressed", "abr.compressed", d.abr_compressed);
     f("abr_retraced", "abr.retraced", d.abr_retraced);
     f("abr_masks_widened", "abr.masks_widened", d.abr_masks_widened);
-    f("coplanar_dropped", "coplanar_dropped", d.coplanar_dropped);
     f("overshoot_eroded", "overshoot_eroded", d.overshoot_eroded);
     f("masks_grown", "masks_grown", d.masks_grown);
     f("masks_missing", "masks_missing", d.masks_missing);

@@ -1,7 +1,7 @@
 #pragma once
 // Stages 2 and 3 of one object from its coarse selection: the object sphere (Eq. 4-5), view
 // completeness (Eq. 6, A.1-A.2), spherical spiral sampling and the fine round (Eq. 7-8), and ABR
-// (Eq. 9-14, B) with the rules beyond the paper that run around it (R8, R10; docs/robust.md).
+// (Eq. 9-14, B) with the rule beyond the paper that runs before it (R8; docs/robust.md).
 #include <chrono>
 #include <cstddef>
 #include <functional>
@@ -15,7 +15,6 @@
 #include <Eigen/Core>
 
 #include "vcar/algo/boundary_refinement.hpp"
-#include "vcar/algo/coplanar_background.hpp"
 #include "vcar/algo/decisive_threshold.hpp"
 #include "vcar/algo/diagnostics.hpp"
 #include "vcar/algo/params.hpp"
@@ -83,36 +82,6 @@ inline LogScales refine_boundaries(const GaussianScene& scene, const std::vector
   return std::move(a.log_scale);
 }
 
-// Eq. R10 on the selection (scores aligned with it), from the coarse round's occlusion test over
-// the whole scene (coarse_seen: V^o per scene Gaussian; empty: nothing to do): hidden candidates
-// on a seen background plane dropped. False (diag.note says why) when it drops every one.
-inline bool drop_coplanar_background(const GaussianScene& scene, std::vector<Index>& selected,
-                                     std::vector<float>& scores, std::span<const std::uint16_t> coarse_seen,
-                                     const VcarParams& params, Diagnostics& diag) {
-  if (!(params.coplanar.radius > 0.f) || coarse_seen.empty()) return true;
-  const auto tc = Clock::now();
-  CoplanarParams cp;
-  cp.radius = params.coplanar.radius;
-  const std::vector<std::size_t> drop =
-      coplanar_background(scene, selected, [&](Index i) { return coarse_seen[i] > 0; }, cp);  // Eq. R10
-  std::size_t w = 0;
-  for (std::size_t k = 0, d = 0; k < selected.size(); ++k) {
-    if (d < drop.size() && drop[d] == k) { ++d; continue; }
-    selected[w] = selected[k];
-    scores[w++] = scores[k];
-  }
-  selected.resize(w);
-  scores.resize(w);
-  diag.coplanar_dropped = drop.size();
-  diag.n_final = selected.size();
-  diag.timings_s.emplace_back("coplanar", seconds_since(tc));
-  if (selected.empty()) {
-    diag.note = "Eq. R10 dropped every candidate (hidden on a background plane); set coplanar_radius=0";
-    return false;
-  }
-  return true;
-}
-
 // Stages 2 and 3 of vcar::segment for one object, from its coarse selection `selected`
 // (scores: its R_i): sphere (Eq. 4-5), view completeness (Eq. 6), SSS and the fine round
 // (Eq. 7-8), ABR (Eq. 9-14). In steps, so that several objects can share one segmenter call
@@ -120,8 +89,8 @@ inline bool drop_coplanar_background(const GaussianScene& scene, std::vector<Ind
 //   start()      sphere, view completeness, V_sampled and the fine round's frames;
 //   has_round()  whether a fine round runs; then frames(), coarse_set(), render_need() and one
 //                on_mask(frame, mask, render) per frame, then end_round();
-//   finish()     Eq. R10, R8 and ABR: fills the result.
-// start(), end_round() and finish() return false when a stage selected nothing
+//   finish()     R8 and ABR: fills the result.
+// start() and end_round() return false when a stage selected nothing
 // (diagnostics.note says which). `train_masks` holds the coarse round's training masks (indexed
 // by training view) for ABR and takes the fine round's.
 class ObjectRefinement {
@@ -225,13 +194,7 @@ public:
     return true;
   }
 
-  bool finish(const ProgressCallback& progress, Clock::time_point t_start, std::span<const std::uint16_t> coarse_seen) {
-    // ---- Beyond the paper: hidden candidates on a seen background plane (Eq. R10), from the
-    // coarse round's occlusion test over the whole scene (coarse_seen: V^o per scene Gaussian).
-    // Not after a split fine vote (Eq. R7): masks that undershoot label the object's own seen
-    // rim background, and R10 would carry that label into the hidden part of its planes.
-    if (!verdict_.split && !drop_coplanar_background(scene_, selected_, scores_, coarse_seen, params_, diag_)) return false;
-
+  void finish(const ProgressCallback& progress, Clock::time_point t_start) {
     // ---- Stage 3: ABR on the training views with masks from the latest round (Eq. 9-14, B).
     if (params_.enable_abr) stage(progress, t_start, "abr");
     // Eq. R8 after a split fine vote: each training mask widened by its undershoot, and the
@@ -252,7 +215,6 @@ public:
     result_.indices = std::move(selected_);
     result_.scores = std::move(scores_);
     diag_.n_final = result_.indices.size();
-    return true;
   }
 
 private:
@@ -286,8 +248,7 @@ template <Renderer R, Segmenter S>
 bool refine(const GaussianScene& scene, const std::vector<Camera>& train_cameras, const Prompt& prompt, R& renderer,
             S& segmenter, const VcarParams& params, const ProgressCallback& progress, Clock::time_point t_start,
             std::vector<std::optional<RleMask>>& train_masks, std::vector<Index> selected, std::vector<float> scores,
-            SegmentationResult& result, std::string_view fine_round = "fine round",
-            std::span<const std::uint16_t> coarse_seen = {}) {
+            SegmentationResult& result, std::string_view fine_round = "fine round") {
   ObjectRefinement r(scene, train_cameras, prompt, params, train_masks, std::move(selected), std::move(scores), result);
   if (!r.start(renderer, progress, t_start)) return false;
   if (r.has_round()) {
@@ -297,7 +258,8 @@ bool refine(const GaussianScene& scene, const std::vector<Camera>& train_cameras
         result.diagnostics.masks_missing, r.render_need());
     if (!r.end_round(t.render, t.total - t.render - t.voting, t.voting)) return false;
   }
-  return r.finish(progress, t_start, coarse_seen);
+  r.finish(progress, t_start);
+  return true;
 }
 
 }  // namespace vcar::detail

@@ -99,7 +99,7 @@ struct VcarParams {
   // Eq. R14, the fine round's threshold read from its own vote where the round's masks
   // measurably undershoot (the median of R6a's e_j over its masked frames is positive; R6a runs
   // where undershoot.band > 0): the emptiest bin of the fine vote's ratio histogram between
-  // tau_coarse and its fullest bin (vote_valley.hpp), in place of tau_fine; R8 and R10 read the
+  // tau_coarse and its fullest bin (vote_valley.hpp), in place of tau_fine; R8 reads the
   // vote as split where R14's threshold is applied below tau_fine. robust: on (it replaced R6d's
   // fixed 0.7 on 2026-12-06).
   struct Valley {
@@ -113,13 +113,6 @@ struct VcarParams {
   struct Strict {
     float tau = 0.f;
   } strict;
-  // Eq. R10: a fine candidate that no training view sees (the coarse round's occlusion test) is
-  // background when more seen background Gaussians than seen selected ones lie on its plane
-  // within radius D (D the selection's extent): normals within 5 degrees, plane distance within
-  // the two thicknesses (CoplanarParams). Needs evidence.occlusion; radius 0 = off.
-  struct Coplanar {
-    float radius = 0.f;
-  } coplanar;
   // Eq. R11-R12, the signed snap of each mask to the occlusion edges of the view's render (depth
   // steps over depth_tolerance; the render is asked for depth), one estimate and one switch: o_j,
   // the contour's median signed distance outside those edges, and its quartiles q1_j, q3_j
@@ -175,8 +168,7 @@ struct VcarParams {
   // round's band as wide as the masks' measured undershoot (R6) where the vote without it splits
   // (R6c), the fine threshold at the valley of the fine vote's ratios (R14), the strict threshold
   // 0.85 when the fine vote is decisive against it (R7), ABR on masks widened by their undershoot when it is
-  // split, on their own footprints (R8), hidden candidates on a seen background plane dropped
-  // (R10), each mask snapped to the render's occlusion edges where three quarters of its contour
+  // split, on their own footprints (R8), each mask snapped to the render's occlusion edges where three quarters of its contour
   // agree: eroded where it reaches 1 px or more past them (R11), grown to them where it stops
   // short (R12), and each view weighted by how its mask agrees with the round's consensus (R13);
   // the spiral's elevations from -10 degrees, the released code's lowest, not the paper's -60
@@ -185,7 +177,7 @@ struct VcarParams {
   // parameters. Chosen on the field's tuning seeds and the synthetic suite
   // (docs/notes/default-2026-12-02.md; the snap's conditions on SAM-like drift,
   // docs/notes/default-2026-12-03.md; R14, docs/notes/field-valley-2026-12-06.md), R13 on
-  // (SAM-like drift). (R1, R4, R5, R9 and R6d were removed: inert in every preset, never better
+  // (SAM-like drift). (R1, R4, R5, R9, R6d and R10 were removed: inert in every preset, never better
   // on the field, or replaced; docs/robust.md, appendix.)
   static VcarParams robust() {
     VcarParams p;
@@ -194,7 +186,6 @@ struct VcarParams {
     p.undershoot.band = 1.5f;
     p.valley.enabled = true;
     p.strict.tau = 0.85f;
-    p.coplanar.radius = 0.75f;
     p.snap.enabled = true;
     p.reliability.enabled = true;
     return p;
@@ -244,7 +235,7 @@ struct VcarParams {
     f("occlusion", p.evidence.occlusion); f("kappa", p.evidence.kappa);
     f("undershoot_band", p.undershoot.band); f("valley", p.valley.enabled);
     f("tau_strict", p.strict.tau); f("abr_lowpass", p.abr_lowpass);
-    f("coplanar_radius", p.coplanar.radius); f("snap", p.snap.enabled);
+    f("snap", p.snap.enabled);
     f("view_reliability", p.reliability.enabled);
   }
 
@@ -285,10 +276,6 @@ struct VcarParams {
     if (!(undershoot.band >= 0.f && undershoot.band <= 100.f))
       bad("undershoot_band", "must be in [0, 100] (0 = off), got " + std::to_string(undershoot.band));
     unit("tau_strict", strict.tau);
-    if (!(coplanar.radius >= 0.f && coplanar.radius <= 10.f))
-      bad("coplanar_radius", "must be in [0, 10] (0 = off), got " + std::to_string(coplanar.radius));
-    if (coplanar.radius > 0.f && !evidence.occlusion)
-      bad("coplanar_radius", "Eq. R10 reads the coarse round's occlusion test: set occlusion=true or coplanar_radius=0");
   }
 
 };

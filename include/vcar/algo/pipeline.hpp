@@ -103,7 +103,7 @@ SegmentationResult segment(const GaussianScene& scene, const std::vector<Camera>
   detail::coarse_selection(coarse, params, diag, selected, scores);
   const bool complete = detail::refine(
       scene, train_cameras, prompt, renderer, segmenter, params, progress, t_start, train_masks, std::move(selected),
-      std::move(scores), result, "fine round", coarse.occlusion() ? coarse.unoccluded_views() : std::span<const std::uint16_t>{});
+      std::move(scores), result, "fine round");
   timing("total", seconds_since(t_start));
   if (complete) stage("done");
   return result;

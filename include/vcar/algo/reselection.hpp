@@ -21,11 +21,11 @@
 //
 // The default preset (VcarParams::robust(), as vcar::segment) reads renders: the occlusion test
 // (Eq. R3) and the mask edits (Eq. R11, R12) need each training view's alpha and depth over the
-// whole scene, and Eq. R10 the occlusion test's counts. Given a renderer, the constructor renders
+// whole scene. Given a renderer, the constructor renders
 // every training view once and keeps its alpha and depth (8 bytes per pixel per view); a mask is
 // edited (Eq. R11, R12) when it is set, and select() votes every view again (the robust vote's
-// levels and view weights, Eq. R2, R13, are not taken back view by view), then Eq. R10 and the
-// incremental ABR. The paper presets (Eq. 1-3) need no renderer and vote incrementally.
+// levels and view weights, Eq. R2, R13, are not taken back view by view), then the incremental
+// ABR. The paper presets (Eq. 1-3) need no renderer and vote incrementally.
 #include <algorithm>
 #include <cstddef>
 #include <memory>
@@ -123,16 +123,15 @@ public:
     diag.masks_missing = cameras_.size() - masks();
     auto tv = detail::Clock::now();
     std::vector<Index> selected;
-    std::optional<detail::RoundVote> coarse;  // robust presets: the whole coarse round again
-    if (robust()) {
-      coarse.emplace(*scene_, nullptr, params_, false);
+    if (robust()) {  // the whole coarse round again
+      detail::RoundVote coarse(*scene_, nullptr, params_, false);
       for (std::size_t j : detail::training_order(cameras_.size(), reference_view)) {
-        if (edits_[j] == detail::MaskEdit::eroded) coarse->count_overshoot_eroded();
-        if (edits_[j] == detail::MaskEdit::grown) coarse->count_grown();
-        if (masks_[j]) coarse->add_view(cameras_[j], &decoder_.decode(*masks_[j]), &renders_[j], params_.depth_tolerance);
-        else coarse->add_view(cameras_[j], nullptr, nullptr, params_.depth_tolerance);
+        if (edits_[j] == detail::MaskEdit::eroded) coarse.count_overshoot_eroded();
+        if (edits_[j] == detail::MaskEdit::grown) coarse.count_grown();
+        if (masks_[j]) coarse.add_view(cameras_[j], &decoder_.decode(*masks_[j]), &renders_[j], params_.depth_tolerance);
+        else coarse.add_view(cameras_[j], nullptr, nullptr, params_.depth_tolerance);
       }
-      detail::coarse_selection(*coarse, params_, diag, selected, result.scores);  // Eq. R2-R3, R13
+      detail::coarse_selection(coarse, params_, diag, selected, result.scores);  // Eq. R2-R3, R13
     } else {
       vote_->selected(params_.tau_coarse, selected, result.scores);  // Eq. 3
     }
@@ -148,9 +147,6 @@ public:
         diag.note = "the views leave a gap of " + std::to_string(gap.Delta_max_deg) +
                     " degrees: vcar::segment would add sampled views (SSS), re-selection does not";
     }
-    if (coarse && coarse->occlusion() &&
-        !detail::drop_coplanar_background(*scene_, selected, result.scores, coarse->unoccluded_views(), params_, diag))
-      return result;  // Eq. R10 dropped every candidate
     result.log_scale = refine(selected, diag);
     result.indices = std::move(selected);
     diag.timings_s.emplace_back("total", detail::seconds_since(t0));
@@ -170,7 +166,7 @@ private:
         abr_masks_(cameras_.size()), edits_(cameras_.size(), detail::MaskEdit::none) {
     params_.validate();
     if (!renderer && reads_renders())
-      throw Error("this preset reads renders (the occlusion test, Eq. R3, R10-R12, or the robust vote's levels): "
+      throw Error("this preset reads renders (the occlusion test, Eq. R3, R11-R12, or the robust vote's levels): "
                   "construct with a renderer, Reselection(scene, cameras, renderer, params), or use a paper preset "
                   "such as VcarParams::nvos()", "Reselection");
     if (params_.occlusion_aware) throw Error("occlusion_aware needs the fine round's renders (use vcar::segment)", "Reselection");
@@ -184,7 +180,7 @@ private:
   // them for all but Eq. R2 and R13; they are cheap next to a segmenter, so any robust vote
   // takes the renderer path).
   bool reads_renders() const {
-    return params_.robust_vote() || params_.snap.enabled || params_.coplanar.radius > 0.f;
+    return params_.robust_vote() || params_.snap.enabled;
   }
   bool robust() const { return !renders_.empty(); }
 

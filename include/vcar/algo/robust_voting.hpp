@@ -150,12 +150,6 @@ public:
   // the unoccluded level's without R6).
   std::uint16_t visible(std::size_t k, int level = 0) const { return c_[2 * at(level)][rank_[k]]; }
   std::uint16_t foreground(std::size_t k, int level = 0) const { return c_[2 * at(level) + 1][rank_[k]]; }
-  // V^o of every candidate (level 1), aligned with the candidates.
-  std::span<const std::uint16_t> unoccluded_views() const {
-    unoccluded_.resize(n_);
-    for (std::size_t j = 0; j < n_; ++j) unoccluded_[means_.order[j]] = c_[2][j];
-    return unoccluded_;
-  }
   // Eq. R13: weighs the views voted so far by their agreement with the consensus at `tau`
   // (first the unweighted vote's, then the weighted one's, `iterations` times); the unoccluded
   // level then sums the weights. No effect without the reliability option. Returns r_j.
@@ -313,7 +307,6 @@ private:
   detail::ChunkedMeans means_;           // Morton-sorted means and chunk boxes
   std::vector<std::uint32_t> rank_;      // candidate k -> sorted position
   std::array<std::vector<std::uint16_t>, 6> c_;  // V, F, V^o, F^o, V^s, F^s by sorted position (the last two with R6)
-  mutable std::vector<std::uint16_t> unoccluded_;  // V^o by candidate (unoccluded_views)
   MaskTiles tiles_, sure_tiles_;         // the view's mask and Eq. R6b's sure plane, summarised
   MinPyramid surface_;                   // Eq. R3's bound D / A (1 + tolerance) per pixel
   Mask sure_;                            // Eq. R6b: the sure plane with the outer band (255 = sure)

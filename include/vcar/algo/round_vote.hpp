@@ -52,10 +52,6 @@ public:
       paper_.emplace(scene);
     }
   }
-  // Eq. R3's unoccluded view count V^o of every candidate (empty without the robust vote).
-  std::span<const std::uint16_t> unoccluded_views() const {
-    return robust_ ? robust_->unoccluded_views() : std::span<const std::uint16_t>{};
-  }
   // The view's render is needed: depth and alpha for Eq. R3, R11 and R12 (wants_depth), alpha
   // for Eq. R6.
   bool wants_render() const { return wants_depth() || undershoot_; }

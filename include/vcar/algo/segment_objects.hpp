@@ -65,11 +65,11 @@ inline void ask(const MultiSegmentFn& segmenter, const FrameSequence& seq, const
 // object's G_coarse; each object's request covers its own frames, its prompt on the first of
 // them (the reference view). Timings per object: its renders and votes; the segmenter's own
 // time of the call shared in proportion to the object's frames. "total": the object's share.
-template <Renderer R, class CoarseSeen>
+template <Renderer R>
 void refine_objects(const GaussianScene& scene, const std::vector<Camera>& train_cameras,
                     const std::vector<ObjectPrompt>& objects, R& renderer, const MultiSegmentFn& segmenter,
                     const VcarParams& params, const ProgressCallback& progress, Clock::time_point t_start,
-                    std::vector<std::unique_ptr<RoundVote>>& votes, CoarseSeen&& coarse_seen,
+                    std::vector<std::unique_ptr<RoundVote>>& votes,
                     std::vector<std::vector<std::optional<RleMask>>>& train_masks,
                     std::vector<SegmentationResult>& results) {
   const std::size_t K = objects.size();
@@ -158,7 +158,7 @@ void refine_objects(const GaussianScene& scene, const std::vector<Camera>& train
   }
   for (std::size_t o = 0; o < K; ++o) {
     const auto tf = Clock::now();
-    if (alive[o]) refine[o]->finish(progress, t_start, coarse_seen(o));
+    if (alive[o]) refine[o]->finish(progress, t_start);
     refine[o].reset();
     votes[o].reset();  // its counters are not needed any more
     results[o].diagnostics.timings_s.emplace_back("total", own_s[o] + seconds_since(tf));
@@ -307,12 +307,9 @@ MultiSegmentation segment_objects(const GaussianScene& scene, const std::vector<
   out.timings_s = {{"coarse_render", t_render}, {"coarse_segment", t_total - t_render - t_vote}, {"coarse_voting", t_vote}};
 
   // ---- each object alone: sphere, view completeness, SSS cameras; one batched fine round;
-  // then each object's fine selection, Eq. R10 and ABR (exactly as vcar::segment runs them).
-  auto coarse_seen = [&](std::size_t o) {
-    return votes[o]->occlusion() ? votes[o]->unoccluded_views() : std::span<const std::uint16_t>{};
-  };
-  detail::refine_objects(scene, train_cameras, objects, renderer, segmenter, params, progress, t_start,
-                               votes, coarse_seen, train_masks, out.objects);
+  // then each object's fine selection and ABR (exactly as vcar::segment runs them).
+  detail::refine_objects(scene, train_cameras, objects, renderer, segmenter, params, progress, t_start, votes,
+                         train_masks, out.objects);
   out.conflicts = resolve_conflicts(out.objects, scene.size(), out.lost);
   out.timings_s.emplace_back("total", detail::seconds_since(t_start));
   return out;
