@@ -167,10 +167,11 @@ struct VcarParams {
   // tau_fine 0.8), the evidence levels (R2) with the occlusion test in both rounds (R3), the fine
   // round's band as wide as the masks' measured undershoot (R6) where the vote without it splits
   // (R6c), the fine threshold at the valley of the fine vote's ratios (R14), the strict threshold
-  // 0.85 when the fine vote is decisive against it (R7), ABR on masks widened by their undershoot when it is
-  // split, on their own footprints (R8), each mask snapped to the render's occlusion edges where three quarters of its contour
-  // agree: eroded where it reaches 1 px or more past them (R11), grown to them where it stops
-  // short (R12), and each view weighted by how its mask agrees with the round's consensus (R13);
+  // 0.85 when the fine vote is decisive against it (R7), ABR on masks widened by their undershoot
+  // when it is split, on their own footprints (R8), each mask snapped to the render's occlusion
+  // edges where three quarters of its contour agree: eroded where it reaches 1 px or more past
+  // them (R11), grown to them where it stops short (R12), and each view weighted by how its mask
+  // agrees with the round's consensus (R13);
   // the spiral's elevations from -10 degrees, the released code's lowest, not the paper's -60
   // (below the floor the piece of it in G_coarse hides the object's underside from the
   // segmenter: docs/notes/field-spiral-2026-12-04.md). What vcar::segment uses when given no

@@ -9,7 +9,6 @@
 // training views' masks that ABR needs later are kept run-length encoded (O(boundary) bytes).
 #include <cstddef>
 #include <optional>
-#include <span>
 #include <string>
 #include <string_view>
 #include <vector>

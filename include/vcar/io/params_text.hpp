@@ -125,8 +125,8 @@ inline void set_parameter(VcarParams& p, std::string_view key, std::string_view 
       throw Error("'undershoot_tau' (Eq. R6d) was replaced by 'valley' (true/false: the fine threshold at the fine "
                   "vote's valley, Eq. R14, docs/robust.md)", "--set");
     if (key == "coplanar_radius")  // until 2026-12-06
-      throw Error("'coplanar_radius' (Eq. R10) was removed: it changed no case of the field's held-out seeds "
-                  "(docs/robust.md, appendix)", "--set");
+      throw Error("'coplanar_radius' (Eq. R10) was removed: on the field's held-out seeds it cost as much as it "
+                  "paid (docs/robust.md, appendix)", "--set");
     throw Error("unknown parameter '" + std::string(key) + "'; valid keys: " + parameter_keys(), "--set");
   }
 }
