@@ -99,7 +99,7 @@ struct VcarParams {
   // Eq. R14, the fine round's threshold read from its own vote where the round's masks
   // measurably undershoot (the median of R6a's e_j over its masked frames is positive; R6a runs
   // where undershoot.band > 0): the emptiest bin of the fine vote's ratio histogram between
-  // tau_coarse and its fullest bin (vote_valley.hpp; bins within 10% tie), in place of tau_fine; R8 reads the
+  // tau_coarse and its fullest bin (vote_valley.hpp), in place of tau_fine; R8 reads the
   // vote as split where R14's threshold is applied below tau_fine. robust: on (it replaced R6d's
   // fixed 0.7 on 2026-12-06).
   struct Valley {

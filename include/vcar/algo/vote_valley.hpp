@@ -14,19 +14,14 @@
 // outside [0, B) empty), b_0 the first bin whose lower edge is at least tau_coarse:
 //   m    = argmax_{b >= b_0} h_b                        (ties: the lowest b)
 //   tau* = tau_coarse                                   if m = b_0
-//   tau* = (v + 1/2) w,  v = min {b_0 <= b < m : s_b <= 1.1 min_{b_0 <= c < m} s_c}   otherwise
+//   tau* = (v + 1/2) w,  v = argmin_{b_0 <= b < m} s_b  (ties: the lowest b)   otherwise
 // and the fine round keeps R_i >= tau*, or R7's strict threshold where the vote is decisive
 // against tau* (decisive_threshold.hpp). Only where the round's masks measurably undershoot
 // (masks_undershoot, undershoot.hpp): a neighbour that masks take in on some frames and not on
 // others spreads its ratios up to the object's spike as an undershoot spreads the object's own,
 // and only the masks' measured undershoot tells the two apart (ISNet's guitar,
 // docs/notes/field-valley-2026-12-06.md). A bin at the valley's centre splits it: the histogram
-// cannot place the threshold more finely than its bins. The lowest bin within 10% of the least
-// wins (ties within 10%; exact ties until 2026-12-06): R_i is a ratio of view counts, so a spread
-// object's histogram ripples from bin to bin with no valley between, and the exact argmin put
-// the threshold on a ripple (SAM-like drift, orbit, guitar of held-out seed 11: 0.625, where
-// the smoothed bin at 0.5 holds 9% more; docs/notes/field-valley-ties-2026-12-06.md).
-// O(candidates) once.
+// cannot place the threshold more finely than its bins. O(candidates) once.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -40,8 +35,6 @@ namespace vcar {
 
 // Eq. R14's B: bins of the ratio histogram over [0, 1].
 inline constexpr std::size_t valley_bins = 20;
-// Eq. R14's ties: a bin whose s_b is within 10% of the least counts as tied with it (11 / 10).
-inline constexpr std::size_t valley_tie_tenths = 11;
 
 // Eq. R14: the fine threshold of the ratios `r` (each in [0, 1]), at least `lo` (tau_coarse).
 inline float vote_valley(std::span<const float> r, float lo) {
@@ -60,10 +53,9 @@ inline float vote_valley(std::span<const float> r, float lo) {
     if (h[b] > h[m]) m = b;
   if (m == b0) return lo;
   auto s = [&](std::size_t b) { return (b > 0 ? h[b - 1] : 0) + h[b] + (b + 1 < B ? h[b + 1] : 0); };
-  std::size_t least = s(b0);
-  for (std::size_t b = b0 + 1; b < m; ++b) least = std::min(least, s(b));
-  std::size_t v = b0;  // the lowest bin within valley_tie of the least
-  while (10 * s(v) > valley_tie_tenths * least) ++v;
+  std::size_t v = b0;
+  for (std::size_t b = b0 + 1; b < m; ++b)
+    if (s(b) < s(v)) v = b;
   return (static_cast<float>(v) + 0.5f) / static_cast<float>(B);
 }
 
