@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <vector>
 
 #include <unistd.h>
@@ -424,13 +425,24 @@ TEST_CASE("stage files: relative paths, defaults, and errors naming the file and
   fs::remove_all(dir);
 }
 
-TEST_CASE("the example stage: the three shared captures stand upright on the floor") {
-  const fs::path file = fs::path(VCAR_TEST_DATA_DIR) / ".." / ".." / "examples" / "stages" / "three_objects.json";
-  if (!fs::exists(shared_data / "biker.spz")) {
+namespace {
+
+// An example stage file of the repository (examples/stages/NAME), or nothing (a warning) when the
+// shared captures it reads are not beside the repository.
+std::optional<StageFile> example_stage(const char* name) {
+  if (!fs::exists(shared_data / "biker.spz") || !fs::exists(shared_data / "donut.ply")) {
     WARN("SKIPPED: the shared data is not at " << shared_data.string() << " (the repository's sibling folder shared/)");
-    return;
+    return std::nullopt;
   }
-  const StageFile sf = read_stage_file(file);
+  return read_stage_file(fs::path(VCAR_TEST_DATA_DIR) / ".." / ".." / "examples" / "stages" / name);
+}
+
+}  // namespace
+
+TEST_CASE("the example stage: the three shared captures stand upright on the floor") {
+  const auto stage = example_stage("three_objects.json");
+  if (!stage) return;
+  const StageFile& sf = *stage;
   const World w = make_stage(sf.stage, 1);
   REQUIRE(w.inserted.size() == 3);
   for (std::size_t k = 0; k < 3; ++k) {
@@ -460,13 +472,10 @@ TEST_CASE("the nine-donuts stage: the copies stand apart, none inside a neighbou
   // 0.215 m from its axis, so no two copies meet. For any Gaussians a of copy i and b of copy j,
   // |a - b| >= |c_i - c_j| - r_i - r_j on the floor plane (c: the copy's axis, r: its outermost
   // Gaussian's distance from it), so that bound > 0 for every pair proves it. Until 2026-12-06
-  // the centres stood 0.39 m apart and the copies interpenetrated by up to 6 cm.
-  const fs::path file = fs::path(VCAR_TEST_DATA_DIR) / ".." / ".." / "examples" / "stages" / "nine_donuts.json";
-  if (!fs::exists(shared_data / "donut.ply")) {
-    WARN("SKIPPED: the shared data is not at " << shared_data.string() << " (the repository's sibling folder shared/)");
-    return;
-  }
-  const StageFile sf = read_stage_file(file);
+  // the centres stood 0.39 m apart and the copies interpenetrated by 4-5 cm.
+  const auto stage = example_stage("nine_donuts.json");
+  if (!stage) return;
+  const StageFile& sf = *stage;
   REQUIRE(sf.stage.objects.size() == 9);
   for (std::uint64_t seed : {1u, 11u}) {
     INFO("seed " << seed);
