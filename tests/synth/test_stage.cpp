@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <optional>
+#include <unordered_map>
 #include <vector>
 
 #include <unistd.h>
@@ -464,6 +466,57 @@ TEST_CASE("the example stage: the three shared captures stand upright on the flo
       CHECK(std::max(ext[0], ext[1]) == Approx(o.width).epsilon(0.01));  // the yaw jitter turns its box
       CHECK(ext[2] < 0.5f * std::max(ext[0], ext[1]));  // the donut lies flat
     }
+  }
+}
+
+namespace {
+
+// The smallest distance between a mean of `a` and one of `b` (a grid of `cell` m over b's means:
+// a pair closer than `cell` lies in neighbouring cells, so the answer is exact below `cell` and
+// `cell` otherwise).
+float nearest_between(const World& w, const InsertedObject& a, const InsertedObject& b, float cell) {
+  std::unordered_map<std::int64_t, std::vector<Eigen::Vector3f>> grid;
+  auto key = [&](const Eigen::Vector3i& c) {
+    return (static_cast<std::int64_t>(c.x()) * 4096 + c.y()) * 4096 + c.z();
+  };
+  auto cell_of = [&](const Eigen::Vector3f& x) { return (x / cell).array().floor().cast<int>().matrix().eval(); };
+  for (std::size_t i = b.begin; i < b.begin + b.count; ++i) grid[key(cell_of(w.scene.mu(i)))].push_back(w.scene.mu(i));
+  float best = cell;
+  for (std::size_t i = a.begin; i < a.begin + a.count; ++i) {
+    const Eigen::Vector3f x = w.scene.mu(i);
+    const Eigen::Vector3i c = cell_of(x);
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const auto it = grid.find(key(c + Eigen::Vector3i(dx, dy, dz)));
+          if (it == grid.end()) continue;
+          for (const auto& y : it->second) best = std::min(best, (x - y).norm());
+        }
+  }
+  return best;
+}
+
+}  // namespace
+
+TEST_CASE("the example stage: the three captures stand apart, none inside a neighbour") {
+  // The field's stage (benchmarks/bench_field): neighbours close enough to share a segmenter's
+  // box, never one inside another, where a target's Gaussians would be hidden from every view.
+  // Until 2026-12-06 the donut sat 6 cm inside the guitar's base (means 0.0-0.5 cm apart,
+  // hundreds within 1 cm). Measured now (seeds 1 / 11): biker-guitar 1.4 / 2.5 cm, biker-donut
+  // 5.4 / 4.7 cm, guitar-donut 9.1 / 7.0 cm (the nearest means).
+  const auto stage = example_stage("three_objects.json");
+  if (!stage) return;
+  for (std::uint64_t seed : {1u, 11u}) {
+    INFO("seed " << seed);
+    const World w = make_stage(stage->stage, seed);
+    REQUIRE(w.inserted.size() == 3);
+    const float biker_guitar = nearest_between(w, w.inserted[0], w.inserted[1], 0.1f);
+    const float biker_donut = nearest_between(w, w.inserted[0], w.inserted[2], 0.1f);
+    const float guitar_donut = nearest_between(w, w.inserted[1], w.inserted[2], 0.1f);
+    CHECK(biker_guitar > 0.01f);
+    CHECK(biker_donut > 0.03f);
+    CHECK(guitar_donut > 0.03f);
+    CHECK(std::min({biker_guitar, biker_donut, guitar_donut}) < 0.06f);  // and close: one segmenter box can take in two
   }
 }
 
