@@ -410,12 +410,21 @@ TEST_CASE("Eq. R8: ABR reads the training masks widened by their undershoot only
   // Exact masks: the vote is decisive against its valley, R7's strict threshold.
   CHECK(run(0).tau_fine_applied == p.strict.tau);
   // R7 off: the eroded masks' vote keeps its valley; the exact masks measure no undershoot
-  // (R14's gate: their median e_j is 0), so their round keeps tau_fine.
+  // (R14's first gate: their median e_j is 0) and their vote is a spike at 1 (not spread: the
+  // second gate), so their round keeps tau_fine.
   p.strict.tau = 0.f;
   CHECK(run(5).tau_fine_applied == eroded.tau_fine_applied);
   CHECK(run(0).tau_fine_applied == p.tau_fine);
-  // Without R6a (R6 off) the gate never opens: the eroded masks' round is read at tau_fine.
+  // Without R6a (R6 off) the first gate never opens (every e_j reads 0); the second reads the
+  // vote itself: without R6's band the eroded masks leave fewer than half of G_coarse in the top
+  // bin, the vote is spread, and its valley is the threshold.
   p.undershoot.band = 0.f;
+  const float no_band = run(5).tau_fine_applied;
+  REQUIRE(bin_centre(no_band));
+  CHECK(no_band >= p.tau_coarse);
+  CHECK(no_band != p.tau_fine);
+  // Neither gate: R14 off reads tau_fine.
+  p.valley.enabled = false;
   CHECK(run(5).tau_fine_applied == p.tau_fine);
   p = vcar::VcarParams::robust();
   p.force_fine_round = true;

@@ -82,3 +82,54 @@ TEST_CASE("Eq. R14 against a brute force over random histograms") {
     CHECK(vcar::vote_valley(r, lo) >= lo);
   }
 }
+
+TEST_CASE("Eq. R14's spread gate by hand: fewer than half of the candidates above tau_coarse in the top bin") {
+  // GrabCut-like on an orbit (held-out seed 12's biker, in thousands): the object a spike in bin
+  // 19 over a neighbour taken in on most frames: 153 of 258 above tau_coarse, not spread.
+  std::vector<float> r;
+  add(r, 14, 8); add(r, 15, 19); add(r, 16, 52); add(r, 17, 17); add(r, 18, 9); add(r, 19, 153);
+  add(r, 5, 200);  // below tau_coarse: not read
+  CHECK_FALSE(vcar::vote_spread(r, 0.5f));
+  // SAM-like drift on an orbit (tuning seed 2's biker): the mode in bin 18, 31 of 148 in bin 19.
+  r.clear();
+  add(r, 10, 1); add(r, 11, 1); add(r, 12, 2); add(r, 13, 4); add(r, 14, 8); add(r, 15, 18); add(r, 16, 23);
+  add(r, 17, 26); add(r, 18, 35); add(r, 19, 31);
+  CHECK(vcar::vote_spread(r, 0.5f));
+  // Exactly half in the top bin: not spread (the median is the top bin's lower edge).
+  r.clear();
+  add(r, 19, 10); add(r, 12, 10);
+  CHECK_FALSE(vcar::vote_spread(r, 0.5f));
+  add(r, 12, 1);
+  CHECK(vcar::vote_spread(r, 0.5f));
+  // The bound: with lo = 0.65 (b_0 = 13) the 11 in bin 12 are not read; R_i = 1 is in the top bin.
+  CHECK_FALSE(vcar::vote_spread(r, 0.65f));
+  CHECK_FALSE(vcar::vote_spread(std::vector<float>(5, 1.f), 0.5f));
+  // Nothing at or above b_0, or no bin to read: not spread.
+  CHECK_FALSE(vcar::vote_spread({}, 0.5f));
+  CHECK_FALSE(vcar::vote_spread(std::vector<float>{0.2f, 0.3f}, 0.5f));
+  CHECK_FALSE(vcar::vote_spread(std::vector<float>{0.97f}, 1.f));
+  CHECK_THROWS_WITH(vcar::vote_spread(std::vector<float>{-0.5f}, 0.5f), Catch::Contains("outside [0, 1]"));
+  CHECK_THROWS_WITH(vcar::vote_spread(r, 1.5f), Catch::Contains("lower bound"));
+}
+
+TEST_CASE("Eq. R14's spread gate against the median of the ratios above the bound") {
+  // The gate reads: the median of {R_i : R_i >= b_0 / 20} is below 0.95 (the top bin's lower
+  // edge). Brute force: sort those ratios and compare the upper median with 0.95.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0.f, 1.f);
+  for (int trial = 0; trial < 300; ++trial) {
+    std::vector<float> r(static_cast<std::size_t>(std::uniform_int_distribution<int>(0, 60)(rng)));
+    for (float& x : r) x = u(rng) < 0.4f ? 1.f : u(rng);
+    const float lo = std::uniform_int_distribution<int>(0, 19)(rng) * 0.05f;
+    int b0 = 0;
+    while (b0 / 20.f < lo - 1e-6f) ++b0;
+    std::vector<float> above;
+    for (const float x : r)
+      if (std::min(static_cast<int>(x * 20), 19) >= b0) above.push_back(x);
+    std::sort(above.begin(), above.end());
+    // Spread when fewer than half are >= 0.95: the element at rank floor(n / 2) is below 0.95.
+    const bool expect = !above.empty() && above[above.size() / 2] < 0.95f;
+    INFO("trial " << trial << ", lo " << lo << ", " << above.size() << " above");
+    CHECK(vcar::vote_spread(r, lo) == expect);
+  }
+}

@@ -175,9 +175,10 @@ public:
     diag_.overshoot_eroded += fine_->overshoot_eroded();
     fine_->weigh_views(params_.tau_fine);  // Eq. R13
     float tau = params_.tau_fine;
-    if (params_.valley.enabled && masks_undershoot(std::move(round_undershoot_))) {  // Eq. R14's gate (R6a)
+    if (params_.valley.enabled) {
       fine_->ratios(scores_);
-      tau = vote_valley(scores_, params_.tau_coarse);  // Eq. R14
+      if (masks_undershoot(std::move(round_undershoot_)) || vote_spread(scores_, params_.tau_coarse))  // Eq. R14's gates
+        tau = vote_valley(scores_, params_.tau_coarse);  // Eq. R14
     }
     verdict_ = fine_->selected(tau, params_.strict.tau, split_fraction, selected_, scores_);  // Eq. 3, R7
     verdict_.split = verdict_.split || (verdict_.tau == tau && tau < params_.tau_fine);
