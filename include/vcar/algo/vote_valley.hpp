@@ -61,7 +61,9 @@ inline VoteHistogram vote_histogram(std::span<const float> r, float lo, const ch
 // Eq. R14: the fine threshold of the ratios `r` (each in [0, 1]), at least `lo` (tau_coarse).
 inline float vote_valley(std::span<const float> r, float lo) {
   constexpr std::size_t B = valley_bins;
-  const auto [h, b0] = vote_histogram(r, lo, "vote_valley");
+  const VoteHistogram hist = vote_histogram(r, lo, "vote_valley");
+  const auto& h = hist.h;  // a reference, not a structured binding: lambdas capture it (clang)
+  const std::size_t b0 = hist.b0;
   if (b0 >= B) return lo;
   std::size_t m = b0;
   for (std::size_t b = b0 + 1; b < B; ++b)
@@ -80,7 +82,9 @@ inline float vote_valley(std::span<const float> r, float lo) {
 // False when no candidate reaches b_0.
 inline bool vote_spread(std::span<const float> r, float lo) {
   constexpr std::size_t B = valley_bins;
-  const auto [h, b0] = vote_histogram(r, lo, "vote_spread");
+  const VoteHistogram hist = vote_histogram(r, lo, "vote_spread");
+  const auto& h = hist.h;
+  const std::size_t b0 = hist.b0;
   std::size_t above = 0;
   for (std::size_t b = b0; b < B; ++b) above += h[b];
   return b0 < B && 2 * h[B - 1] < above;
