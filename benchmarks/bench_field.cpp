@@ -275,16 +275,22 @@ class LastRenders {
 public:
   explicit LastRenders(cpu::TiledRenderer& r) : r_(&r) {}
   RenderOutput render(const RenderRequest& q) {
-    for (const auto& [key, out] : kept_)
-      if (key.same(q)) return out;
+    // Counted from the call to the return: the copies this cache makes (an output kept, an output
+    // handed out again) are the harness's, not the method's own time.
     const auto t0 = Clock::now();
+    for (const auto& [key, out] : kept_)
+      if (key.same(q)) {
+        RenderOutput copy = out;
+        seconds_ += since(t0);
+        return copy;
+      }
     RenderOutput out = r_->render(q);
-    seconds_ += since(t0);
     kept_.emplace_back(Key{q}, out);
     if (kept_.size() > 2) kept_.pop_front();
+    seconds_ += since(t0);
     return out;
   }
-  double seconds() const { return seconds_; }  // every render asked for (kept ones counted once)
+  double seconds() const { return seconds_; }  // every render asked for, and the cache's copies
 
 private:
   struct Key {

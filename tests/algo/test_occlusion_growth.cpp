@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <random>
 #include <vector>
 
 #include "vcar/algo/occlusion_growth.hpp"
@@ -134,6 +135,35 @@ TEST_CASE("Eq. R12a-b against a brute-force shortest-path search on an irregular
     for (std::size_t q = 0; q < N; ++q) {
       const bool expect = m.data[q] || (a[q] + b[q] <= reach);
       CHECK((grown.data[q] != 0) == expect);
+    }
+  }
+}
+
+TEST_CASE("Eq. R12 reads the edges within twice its reach of the mask: the same growth from the edges of that box alone") {
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<float> U(0.f, 1.f);
+  const int W = 70, H = 50;
+  for (int trial = 0; trial < 6; ++trial) {
+    ImageF alpha(W, H, 1), depth(W, H, 1);
+    for (std::size_t q = 0; q < alpha.data.size(); ++q) {  // mostly covered, smooth with depth steps
+      const int x = static_cast<int>(q % W), y = static_cast<int>(q / W);
+      alpha.data[q] = U(rng) < 0.05f ? 0.2f : 1.f;
+      depth.data[q] = alpha.data[q] * (1.f + 0.01f * static_cast<float>((x + 2 * y) % 3) + ((x / 9 + y / 7 + trial) % 4 == 0 ? 1.f : 0.f));
+    }
+    Mask m(W, H, 1);
+    const int cx = 20 + 5 * trial, cy = 18 + 2 * trial;
+    for (int y = cy - 4; y <= cy + 4; ++y)
+      for (int x = cx - 6; x <= cx + 6; ++x) m.data[static_cast<std::size_t>(y) * W + x] = (x * y) % 11 ? 255 : 0;
+    const std::vector<std::uint8_t> whole = vcar::occlusion_edges(alpha, depth, 0.05f);
+    for (int reach : {1, 2, 4, 7}) {
+      vcar::OcclusionEdges lazy(alpha, depth, 0.05f);
+      const std::vector<std::uint8_t>& part = lazy.cover(vcar::growth_seed_box(m, reach));
+      Mask a = m, b = m;
+      const std::size_t added = vcar::grow_to_occlusion_edges(a, whole, alpha, depth, 0.05f, reach);
+      CHECK(vcar::grow_to_occlusion_edges(b, part, alpha, depth, 0.05f, reach) == added);
+      CAPTURE(trial, reach, added);
+      CHECK(a.data == b.data);
+      if (reach == 7) CHECK(part != whole);  // the box left some edge out
     }
   }
 }

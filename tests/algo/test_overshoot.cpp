@@ -241,6 +241,12 @@ TEST_CASE("Eq. R11b's quartiles against brute force: a dilated disc erodes, an e
     // for some pixel falls back to the transforms).
     for (int reach : {1, 2, 3, 5, 16})
       for (int k = 0; k < 3; ++k) CHECK(vcar::overshoot_quartiles_px(c.m, e, 2, reach)[k] == got[k]);
+    // And the edges computed on demand, a box around the mask first (OcclusionEdges).
+    for (int window : {0, 2, 48})
+      for (int reach : {0, 1, 16}) {
+        vcar::OcclusionEdges lazy(r.alpha, r.depth, 0.05f);
+        for (int k = 0; k < 3; ++k) CHECK(vcar::overshoot_quartiles_px(c.m, lazy, window, reach)[k] == got[k]);
+      }
   }
 }
 
@@ -262,5 +268,30 @@ TEST_CASE("Eq. R11a over the render equals its per-pixel rule on random renders"
         edges += vcar::occlusion_edge_at(alpha, depth, 0.05f, x, y);
       }
     CHECK(edges > 0);
+    // Over a box: the whole map's values there, every other pixel left as it was; on demand
+    // (OcclusionEdges): the whole map's over every box covered so far.
+    std::uniform_int_distribution<int> X(0, W), Y(0, H);
+    vcar::OcclusionEdges lazy(alpha, depth, 0.05f);
+    std::vector<int> done(e.size(), 0);
+    for (int trial = 0; trial < 20; ++trial) {
+      int x0 = X(rng), x1 = X(rng), y0 = Y(rng), y1 = Y(rng);
+      if (x0 > x1) std::swap(x0, x1);
+      if (y0 > y1) std::swap(y0, y1);
+      const vcar::PixelBox b{x0, y0, x1, y1};
+      std::vector<std::uint8_t> part(e.size(), 7);
+      vcar::occlusion_edges_in(alpha, depth, 0.05f, b, part);
+      const std::vector<std::uint8_t>& on_demand = lazy.cover(b);
+      for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x) done[static_cast<std::size_t>(y) * W + x] = 1;
+      for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+          const std::size_t q = static_cast<std::size_t>(y) * W + x;
+          CAPTURE(W, H, x0, y0, x1, y1, x, y);
+          const bool in_box = x >= x0 && x < x1 && y >= y0 && y < y1;
+          REQUIRE(part[q] == (in_box ? e[q] : 7));
+          if (done[q]) REQUIRE(on_demand[q] == e[q]);
+        }
+    }
+    CHECK(lazy.whole() == e);
   }
 }

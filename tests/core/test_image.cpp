@@ -1,6 +1,10 @@
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
 
 #include "vcar/core/image.hpp"
 
@@ -31,4 +35,29 @@ TEST_CASE("mask_at and mask_at_branchless: the pixel containing the point (floor
     }
   CHECK(differ == 0);
   CHECK(fg == 32);  // pixels (2, 1) and (0, 0), 16 grid points each
+}
+
+TEST_CASE("to_8bit rounds 255 v half away from zero (std::lround), clamped, NaN to 0: every value near a step or a half") {
+  std::vector<float> values = {0.f, 1.f, -0.f, -1e-30f, 1e-30f, 2.f, -3.f, std::numeric_limits<float>::infinity(),
+                               -std::numeric_limits<float>::infinity(), std::numeric_limits<float>::quiet_NaN()};
+  for (int k = 0; k <= 255; ++k)
+    for (const float c : {static_cast<float>(k) / 255.f, (static_cast<float>(k) + 0.5f) / 255.f}) {
+      float lo = c, hi = c;
+      for (int step = 0; step < 4; ++step) {  // the value and its float neighbours on either side
+        values.push_back(lo), values.push_back(hi);
+        lo = std::nextafter(lo, -1.f), hi = std::nextafter(hi, 2.f);
+      }
+    }
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> U(-0.25f, 1.25f);
+  for (int k = 0; k < 20000; ++k) values.push_back(U(rng));
+  vcar::ImageF img(static_cast<int>(values.size()), 1, 1);
+  img.data = values;
+  const vcar::Image<std::uint8_t> out = vcar::to_8bit(img);
+  for (std::size_t k = 0; k < values.size(); ++k) {
+    const float v = values[k];
+    const long want = std::isnan(v) ? 0 : std::lround(std::clamp(v, 0.f, 1.f) * 255.f);
+    CAPTURE(k, v);
+    REQUIRE(static_cast<long>(out.data[k]) == want);
+  }
 }

@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "vcar/core/image.hpp"
+#include "vcar/core/pixel_box.hpp"
 
 namespace vcar {
 
@@ -49,6 +50,11 @@ inline int growth_reach(double o_j, std::size_t foreground, int width, int heigh
                              std::sqrt(static_cast<double>(foreground) / 3.14159265358979323846)});
   return r > 0.0 ? static_cast<int>(std::ceil(r)) : 0;
 }
+
+// The pixels whose edges can decide Eq. R12b for mask m and reach r: a pixel added lies within
+// r steps of the mask (a_j <= r) and within r - 1 of an edge pixel (b_j <= r - a_j, a_j >= 1), so
+// that edge pixel lies within 2 r - 1 px (8-neighbour steps) of the mask's bounding box.
+inline PixelBox growth_seed_box(const Mask& m, int reach) { return foreground_box(m, 2 * std::max(reach, 0)); }
 
 // Eq. R12a-b: grows m (in place) by the covered pixels on a depth-continuous path of at most
 // `reach` steps from the mask to an occlusion edge outside it. `edge`: Eq. R11a of the render

@@ -40,15 +40,18 @@
 // edge at 640 x 480, as an overshoot and cut 1.5 px into the object's fringe (ISNet's donut,
 // docs/notes/field-isnet-donut-2026-12-05.md). Measured o_j per view (forward, orbit, sparse
 // and hemisphere rigs, 3 seeds, 160 x 120, the coarse round's renders of the scene): clean masks
-// median -1 to -5.4, dilated by 2 px 0 to 1, by 4 px 1.4 to 2.8. Per view: three exact distance
-// transforms, two to measure (over the mask's bounding box grown by 48 px, the whole image's only
-// where that box cannot decide a contour pixel's s(c)), one over the mask's bounding box to erode.
+// median -1 to -5.4, dilated by 2 px 0 to 1, by 4 px 1.4 to 2.8. Per view: Eq. R11a over the
+// mask's bounding box grown by 48 px (OcclusionEdges; the whole render's only where that box
+// cannot decide a contour pixel's s(c), which then reads the nearest edge pixel on each side by
+// rows, RowSeeds), two exact distance transforms over that box to measure, one over the mask's
+// bounding box to erode.
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include "vcar/core/distance_transform.hpp"
@@ -56,6 +59,7 @@
 #include "vcar/core/mask_contour.hpp"
 #include "vcar/core/nearest_pixels.hpp"
 #include "vcar/core/pixel_box.hpp"
+#include "vcar/core/row_seeds.hpp"
 
 namespace vcar {
 
@@ -91,27 +95,71 @@ inline bool occlusion_edge_at(const ImageF& alpha, const ImageF& depth, float de
          (y + 1 < H && far_side(q + W));
 }
 
-// Eq. R11a over the whole render: 1 where the pixel is the near side of an occlusion edge.
-inline std::vector<std::uint8_t> occlusion_edges(const ImageF& alpha, const ImageF& depth, float delta) {
-  // occlusion_edge_at at every pixel, each pixel's surface depth D / A divided once.
+// Eq. R11a over the pixels of box b of the render: e (one byte per pixel of the image) gets 1
+// where the pixel is the near side of an occlusion edge, 0 elsewhere in b; pixels outside b are
+// left as they are. A pixel reads its 4-neighbours only, so b's values are the whole render's.
+inline void occlusion_edges_in(const ImageF& alpha, const ImageF& depth, float delta, const PixelBox& b,
+                               std::vector<std::uint8_t>& e) {
+  // occlusion_edge_at at every pixel of b, each surface depth D / A (b grown by the neighbours'
+  // pixel) divided once.
   const int W = alpha.width, H = alpha.height;
-  std::vector<float> s(alpha.data.size());
-  std::vector<std::uint8_t> has(alpha.data.size()), e(alpha.data.size(), 0);
-  for (std::size_t q = 0; q < s.size(); ++q) {
-    has[q] = alpha.data[q] >= 0.5f;
-    s[q] = depth.data[q] / alpha.data[q];
-  }
-  for (int y = 0; y < H; ++y)
-    for (int x = 0; x < W; ++x) {
-      const std::size_t q = static_cast<std::size_t>(y) * W + x;
-      if (!has[q]) continue;
-      const float near = s[q] * (1.f + delta);
-      auto far_side = [&](std::size_t r) { return !has[r] || s[r] > near; };  // no surface: infinitely far
-      e[q] = (x > 0 && far_side(q - 1)) || (x + 1 < W && far_side(q + 1)) || (y > 0 && far_side(q - W)) ||
-             (y + 1 < H && far_side(q + W));
+  if (b.empty()) return;
+  const PixelBox g{std::max(0, b.x0 - 1), std::max(0, b.y0 - 1), std::min(W, b.x1 + 1), std::min(H, b.y1 + 1)};
+  std::vector<float> s(static_cast<std::size_t>(g.width()) * g.height());
+  std::vector<std::uint8_t> has(s.size());
+  for (int y = g.y0; y < g.y1; ++y)
+    for (int x = g.x0; x < g.x1; ++x) {
+      const std::size_t q = static_cast<std::size_t>(y) * W + x, k = g.at(x, y);
+      has[k] = alpha.data[q] >= 0.5f;
+      s[k] = depth.data[q] / alpha.data[q];
     }
+  const std::size_t gw = static_cast<std::size_t>(g.width());
+  for (int y = b.y0; y < b.y1; ++y)
+    for (int x = b.x0; x < b.x1; ++x) {
+      const std::size_t k = g.at(x, y);
+      std::uint8_t& out = e[static_cast<std::size_t>(y) * W + x];
+      if (!has[k]) {
+        out = 0;
+        continue;
+      }
+      const float near = s[k] * (1.f + delta);
+      auto far_side = [&](std::size_t r) { return !has[r] || s[r] > near; };  // no surface: infinitely far
+      out = (x > 0 && far_side(k - 1)) || (x + 1 < W && far_side(k + 1)) || (y > 0 && far_side(k - gw)) ||
+            (y + 1 < H && far_side(k + gw));
+    }
+}
+
+// Eq. R11a over the whole render.
+inline std::vector<std::uint8_t> occlusion_edges(const ImageF& alpha, const ImageF& depth, float delta) {
+  std::vector<std::uint8_t> e(alpha.data.size(), 0);
+  occlusion_edges_in(alpha, depth, delta, PixelBox{0, 0, alpha.width, alpha.height}, e);
   return e;
 }
+
+// Eq. R11a on demand: the map of the whole render, exact over the boxes asked for so far
+// (cover), 0 elsewhere. R11b reads it near the mask's contour (the whole image only where a box
+// cannot decide a contour pixel), R12 within twice its reach of the mask: most views need a box
+// around the mask, not the whole render.
+class OcclusionEdges {
+public:
+  OcclusionEdges(const ImageF& alpha, const ImageF& depth, float delta)
+      : alpha_(&alpha), depth_(&depth), delta_(delta), e_(alpha.data.size(), 0) {}
+  // The map, exact over b and every box covered before.
+  const std::vector<std::uint8_t>& cover(const PixelBox& b) {
+    if (done_.contains(b)) return e_;
+    done_ = done_.united(b);  // its earlier part is recomputed: the same values
+    occlusion_edges_in(*alpha_, *depth_, delta_, done_, e_);
+    return e_;
+  }
+  const std::vector<std::uint8_t>& whole() { return cover(PixelBox{0, 0, alpha_->width, alpha_->height}); }
+
+private:
+  const ImageF* alpha_;
+  const ImageF* depth_;
+  float delta_;
+  std::vector<std::uint8_t> e_;
+  PixelBox done_;
+};
 
 // Eq. R11b: the quartiles {q1_j, o_j, q3_j} of s(c) over mask m's contour (px; > 0: outside the
 // render's occlusion edges `edge`, Eq. R11a), o_j the overshoot. {0, 0, 0} when no contour pixel
@@ -120,13 +168,20 @@ inline std::vector<std::uint8_t> occlusion_edges(const ImageF& alpha, const Imag
 // below): when the quartiles are certain from the values found (below), they are the result.
 // Otherwise the two distance
 // transforms run over the mask's bounding box grown by `window` px; a contour pixel whose nearer
-// side is not certain from the box (an edge outside it could be nearer) reads both transforms of
-// the whole image instead. Either way the result is the whole image's transforms', for any
-// reach and window.
+// side is not certain from the box (an edge outside it could be nearer) reads the nearest edge
+// pixel of the whole image on each side instead (RowSeeds). Either way the result is the whole
+// image's transforms', for any reach and window.
+// The edges are read through cover(box), which returns the map exact over that box: a box
+// around the mask first, the whole render only for the pixels the box cannot decide.
 inline constexpr int overshoot_window_px = 48;
-inline std::array<double, 3> overshoot_quartiles_px(const Mask& m, const std::vector<std::uint8_t>& edge,
-                                                    int window = overshoot_window_px, int reach = contour_reach_px) {
+namespace detail {
+template <class Cover>
+std::array<double, 3> overshoot_quartiles(const Mask& m, Cover&& cover, int window, int reach) {
   const int W = m.width, H = m.height;
+  const PixelBox fg = foreground_box(m, 0);
+  if (fg.empty()) return {0.0, 0.0, 0.0};  // no foreground, no contour
+  const PixelBox b = fg.grown(std::max(window, 0), W, H);
+  const std::vector<std::uint8_t>& edge = cover(fg.grown(std::max({window, reach, 0}), W, H));
   if (reach > 0) {
     const NearestPixels& near = nearest_pixels(reach);
     std::vector<std::size_t> contour;
@@ -164,8 +219,6 @@ inline std::array<double, 3> overshoot_quartiles_px(const Mask& m, const std::ve
     if (certain) return out;
     if (n == 0) return {0.0, 0.0, 0.0};  // no contour
   }
-  const PixelBox b = foreground_box(m, std::max(window, 0));
-  if (b.width() <= 0) return {0.0, 0.0, 0.0};  // no foreground, no contour
   auto seeds = [&](bool inside) {
     return [&, inside](int x, int y) {
       const std::size_t q = static_cast<std::size_t>(y) * W + x;
@@ -174,11 +227,11 @@ inline std::array<double, 3> overshoot_quartiles_px(const Mask& m, const std::ve
   };
   const std::vector<double> box_in = squared_distance_in(b, seeds(true));
   const std::vector<double> box_out = squared_distance_in(b, seeds(false));
-  std::vector<double> all_in, all_out;  // the whole image's, only when a pixel needs them
-  auto whole = [&](bool inside) -> const std::vector<double>& {
-    std::vector<double>& d = inside ? all_in : all_out;
-    if (d.empty()) d = squared_distance_in(PixelBox{0, 0, W, H}, seeds(inside));
-    return d;
+  std::optional<RowSeeds> all_in, all_out;  // the whole image's, only when a pixel needs them
+  auto whole = [&](bool inside, std::size_t q) {
+    std::optional<RowSeeds>& d = inside ? all_in : all_out;
+    if (!d) cover(PixelBox{0, 0, W, H}), d.emplace(W, H, seeds(inside));
+    return d->nearest_squared(static_cast<int>(q % static_cast<std::size_t>(W)), static_cast<int>(q / static_cast<std::size_t>(W)));
   };
   return contour_quartiles(m, [&](std::size_t q) {  // s(c); no edge pixel at all: no value
     const int x = static_cast<int>(q % static_cast<std::size_t>(W)), y = static_cast<int>(q / static_cast<std::size_t>(W));
@@ -191,13 +244,25 @@ inline std::array<double, 3> overshoot_quartiles_px(const Mask& m, const std::ve
     if (!out_exact && d_in < o2) return std::sqrt(d_in);
     if (!in_exact && d_out < o2) return -std::sqrt(d_out);
     if (!in_exact || !out_exact) {
-      d_in = whole(true)[q];
-      d_out = whole(false)[q];
+      d_in = whole(true, q);
+      d_out = whole(false, q);
     }
     const double d2 = std::min(d_in, d_out);
     if (!std::isfinite(d2)) return std::numeric_limits<double>::quiet_NaN();
     return d_in <= d_out ? std::sqrt(d_in) : -std::sqrt(d_out);
   });
+}
+}  // namespace detail
+
+// Eq. R11b from the whole render's edge map.
+inline std::array<double, 3> overshoot_quartiles_px(const Mask& m, const std::vector<std::uint8_t>& edge,
+                                                    int window = overshoot_window_px, int reach = contour_reach_px) {
+  return detail::overshoot_quartiles(m, [&](const PixelBox&) -> const std::vector<std::uint8_t>& { return edge; }, window, reach);
+}
+// Eq. R11b from the render's edges computed on demand (the same values).
+inline std::array<double, 3> overshoot_quartiles_px(const Mask& m, OcclusionEdges& edges,
+                                                    int window = overshoot_window_px, int reach = contour_reach_px) {
+  return detail::overshoot_quartiles(m, [&](const PixelBox& b) -> const std::vector<std::uint8_t>& { return edges.cover(b); }, window, reach);
 }
 // Eq. R11b: the overshoot o_j alone.
 inline double overshoot_px(const Mask& m, const std::vector<std::uint8_t>& edge) {

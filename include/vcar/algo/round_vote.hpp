@@ -145,7 +145,7 @@ inline const Mask* edit_mask(const Mask& m, const RenderOutput& render, bool ove
   auto foreground = [](const Mask& x) {
     return static_cast<std::size_t>(std::count_if(x.data.begin(), x.data.end(), [](std::uint8_t v) { return v != 0; }));
   };
-  const std::vector<std::uint8_t> edges = occlusion_edges(render.alpha, render.depth, params.depth_tolerance);  // Eq. R11a
+  OcclusionEdges edges(render.alpha, render.depth, params.depth_tolerance);  // Eq. R11a, over the boxes read
   const std::array<double, 3> q = overshoot_quartiles_px(m, edges);  // Eq. R11b
   const double o = q[1];
   const OvershootScale scale = OvershootScale::of(m.width, m.height);
@@ -160,7 +160,9 @@ inline const Mask* edit_mask(const Mask& m, const RenderOutput& render, bool ove
   if (grow && dir == SnapDirection::grow) {
     const int reach_px = growth_reach(o, foreground(m), m.width, m.height, grow_max_diagonal, grow_margin_px);  // Eq. R12c
     scratch = m;
-    if (grow_to_occlusion_edges(scratch, edges, render.alpha, render.depth, params.depth_tolerance, reach_px) > 0) {
+    // Eq. R12 reads the edges within twice its reach of the mask (growth_seed_box).
+    const std::vector<std::uint8_t>& e = edges.cover(growth_seed_box(m, reach_px));
+    if (grow_to_occlusion_edges(scratch, e, render.alpha, render.depth, params.depth_tolerance, reach_px) > 0) {
       edit = MaskEdit::grown;  // Eq. R12b
       return &scratch;
     }

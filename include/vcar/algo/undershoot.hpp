@@ -24,6 +24,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include "vcar/core/distance_transform.hpp"
@@ -31,6 +32,7 @@
 #include "vcar/core/mask_contour.hpp"
 #include "vcar/core/nearest_pixels.hpp"
 #include "vcar/core/pixel_box.hpp"
+#include "vcar/core/row_seeds.hpp"
 
 namespace vcar {
 
@@ -40,8 +42,8 @@ namespace vcar {
 // half of them find it, the median is theirs (the others' values are larger). Otherwise the
 // distance transform runs over the mask's bounding box grown by `window` px; a contour pixel
 // farther from the render's background in the box than from the box's outside (the background
-// there could be nearer) reads the whole image's transform instead. Either way the result is
-// the whole image's transform's, for any reach and window.
+// there could be nearer) reads the nearest background pixel of the whole image instead (by rows,
+// RowSeeds). Either way the result is the whole image's transform's, for any reach and window.
 inline constexpr int undershoot_window_px = 48;
 inline double undershoot_px(const Mask& m, const ImageF& alpha, int window = undershoot_window_px,
                             int reach = contour_reach_px) {
@@ -70,14 +72,14 @@ inline double undershoot_px(const Mask& m, const ImageF& alpha, int window = und
   const PixelBox b = foreground_box(m, std::max(window, 0));
   if (b.width() <= 0) return 0.0;  // no foreground, no contour
   const std::vector<double> box = squared_distance_in(b, background);
-  std::vector<double> whole;  // the whole image's, only when a pixel needs it
+  std::optional<RowSeeds> whole;  // the whole image's, only when a pixel needs it
   return contour_median(m, [&](std::size_t q) {
     const int x = static_cast<int>(q % static_cast<std::size_t>(W)), y = static_cast<int>(q / static_cast<std::size_t>(W));
     const double o = b.distance_to_outside(x, y, W, H);
     double d2 = box[b.at(x, y)];
     if (!(d2 <= o * o)) {
-      if (whole.empty()) whole = squared_distance_in(PixelBox{0, 0, W, H}, background);
-      d2 = whole[q];
+      if (!whole) whole.emplace(W, H, background);
+      d2 = whole->nearest_squared(x, y);
     }
     return value(d2);
   });

@@ -48,12 +48,18 @@ inline bool mask_at_branchless(const Mask& m, float u, float v) {
   return in & (m.data[i] != 0);
 }
 
-// Float image in [0,1] to 8-bit (round to nearest, clamped).
+// Float image in [0,1] to 8-bit: round(255 v), halves away from zero (std::lround), v clamped
+// to [0, 1], NaN to 0. Every frame the segmenter gets goes through here, so without a call per
+// value: x = 255 v in [0, 255], t = trunc(x), and x - t is exact (t <= x < t + 1).
 inline Image<std::uint8_t> to_8bit(const ImageF& img) {
   Image<std::uint8_t> out(img.width, img.height, img.channels);
+  const float* in = img.data.data();
+  std::uint8_t* o = out.data.data();
   for (std::size_t k = 0; k < img.data.size(); ++k) {
-    const float v = img.data[k] < 0.f ? 0.f : (img.data[k] > 1.f ? 1.f : img.data[k]);
-    out.data[k] = static_cast<std::uint8_t>(std::lround(v * 255.f));
+    const float v = in[k] > 0.f ? (in[k] < 1.f ? in[k] : 1.f) : 0.f;  // NaN: 0
+    const float x = v * 255.f;
+    const int t = static_cast<int>(x);
+    o[k] = static_cast<std::uint8_t>(t + (x - static_cast<float>(t) >= 0.5f ? 1 : 0));
   }
   return out;
 }

@@ -17,6 +17,22 @@ struct PixelBox {
   int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
   int width() const { return x1 - x0; }
   int height() const { return y1 - y0; }
+  bool empty() const { return x1 <= x0 || y1 <= y0; }
+  // Whether every pixel of o lies in this box (an empty o does).
+  bool contains(const PixelBox& o) const {
+    return o.empty() || (!empty() && o.x0 >= x0 && o.y0 >= y0 && o.x1 <= x1 && o.y1 <= y1);
+  }
+  // The smallest box holding both.
+  PixelBox united(const PixelBox& o) const {
+    if (empty()) return o;
+    if (o.empty()) return *this;
+    return {std::min(x0, o.x0), std::min(y0, o.y0), std::max(x1, o.x1), std::max(y1, o.y1)};
+  }
+  // The box grown by g px on every side, clipped to a W x H image (empty stays empty).
+  PixelBox grown(int g, int W, int H) const {
+    if (empty()) return {};
+    return {std::max(0, x0 - g), std::max(0, y0 - g), std::min(W, x1 + g), std::min(H, y1 + g)};
+  }
   // Position of image pixel (x, y), inside the box, in row-major box order.
   std::size_t at(int x, int y) const { return static_cast<std::size_t>(y - y0) * width() + (x - x0); }
   // Every pixel of a W x H image outside the box lies at least this far from (x, y) inside it
@@ -42,8 +58,7 @@ inline PixelBox foreground_box(const Mask& m, int grow) {
         b.x1 = std::max(b.x1, x + 1), b.y1 = std::max(b.y1, y + 1);
       }
   if (b.x1 == 0) return {};
-  return {std::max(0, b.x0 - grow), std::max(0, b.y0 - grow), std::min(m.width, b.x1 + grow),
-          std::min(m.height, b.y1 + grow)};
+  return b.grown(grow, m.width, m.height);
 }
 
 // squared_distance_to over the box only: seed(x, y) for the box's pixels, distances by box
