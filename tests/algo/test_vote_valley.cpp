@@ -80,6 +80,8 @@ TEST_CASE("Eq. R14 against a brute force over random histograms") {
     INFO("trial " << trial << ", lo " << lo);
     CHECK(vcar::vote_valley(r, lo) == Approx(expect));
     CHECK(vcar::vote_valley(r, lo) >= lo);
+    // One histogram read by both (what the fine round does): the same threshold.
+    CHECK(vcar::vote_valley(vcar::vote_histogram(r, lo, "test")) == vcar::vote_valley(r, lo));
   }
 }
 
@@ -131,5 +133,6 @@ TEST_CASE("Eq. R14's spread gate against the median of the ratios above the boun
     const bool expect = !above.empty() && above[above.size() / 2] < 0.95f;
     INFO("trial " << trial << ", lo " << lo << ", " << above.size() << " above");
     CHECK(vcar::vote_spread(r, lo) == expect);
+    CHECK(vcar::vote_spread(vcar::vote_histogram(r, lo, "test")) == expect);
   }
 }

@@ -177,8 +177,9 @@ public:
     float tau = params_.tau_fine;
     if (params_.valley.enabled) {
       fine_->ratios(scores_);
-      if (masks_undershoot(std::move(round_undershoot_)) || vote_spread(scores_, params_.tau_coarse))  // Eq. R14's gates
-        tau = vote_valley(scores_, params_.tau_coarse);  // Eq. R14
+      const VoteHistogram hist = vote_histogram(scores_, params_.tau_coarse, "the fine vote");
+      if (masks_undershoot(std::move(round_undershoot_)) || vote_spread(hist))  // Eq. R14's gates
+        tau = vote_valley(hist);  // Eq. R14
     }
     verdict_ = fine_->selected(tau, params_.strict.tau, split_fraction, selected_, scores_);  // Eq. 3, R7
     verdict_.split = verdict_.split || (verdict_.tau == tau && tau < params_.tau_fine);

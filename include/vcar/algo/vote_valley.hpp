@@ -44,6 +44,7 @@ inline constexpr std::size_t valley_bins = 20;
 struct VoteHistogram {
   std::array<std::size_t, valley_bins> h{};
   std::size_t b0 = 0;
+  float lo = 0.f;
 };
 inline VoteHistogram vote_histogram(std::span<const float> r, float lo, const char* who) {
   if (!(lo >= 0.f && lo <= 1.f)) throw Error("the lower bound must be in [0, 1]", who);
@@ -55,15 +56,16 @@ inline VoteHistogram vote_histogram(std::span<const float> r, float lo, const ch
   }
   // The lower edge b_0 / B is at least lo (1e-4 absorbs lo * B's rounding: 0.5 -> bin 10).
   v.b0 = std::min(B, static_cast<std::size_t>(std::ceil(static_cast<double>(lo) * B - 1e-4)));
+  v.lo = lo;
   return v;
 }
 
 // Eq. R14: the fine threshold of the ratios `r` (each in [0, 1]), at least `lo` (tau_coarse).
-inline float vote_valley(std::span<const float> r, float lo) {
+inline float vote_valley(const VoteHistogram& hist) {
   constexpr std::size_t B = valley_bins;
-  const VoteHistogram hist = vote_histogram(r, lo, "vote_valley");
   const auto& h = hist.h;  // a reference, not a structured binding: lambdas capture it (clang)
   const std::size_t b0 = hist.b0;
+  const float lo = hist.lo;
   if (b0 >= B) return lo;
   std::size_t m = b0;
   for (std::size_t b = b0 + 1; b < B; ++b)
@@ -75,19 +77,20 @@ inline float vote_valley(std::span<const float> r, float lo) {
     if (s(b) < s(v)) v = b;
   return (static_cast<float>(v) + 0.5f) / static_cast<float>(B);
 }
+inline float vote_valley(std::span<const float> r, float lo) { return vote_valley(vote_histogram(r, lo, "vote_valley")); }
 
 // Eq. R14's second gate: the vote is spread when fewer than half of the candidates at or above
 // bin b_0 lie in the top bin (the median of those ratios is below (B - 1) / B = 0.95):
 //   2 h_{B-1} < sum_{b >= b_0} h_b                                               (R14's spread)
 // False when no candidate reaches b_0.
-inline bool vote_spread(std::span<const float> r, float lo) {
+inline bool vote_spread(const VoteHistogram& hist) {
   constexpr std::size_t B = valley_bins;
-  const VoteHistogram hist = vote_histogram(r, lo, "vote_spread");
   const auto& h = hist.h;
   const std::size_t b0 = hist.b0;
   std::size_t above = 0;
   for (std::size_t b = b0; b < B; ++b) above += h[b];
   return b0 < B && 2 * h[B - 1] < above;
 }
+inline bool vote_spread(std::span<const float> r, float lo) { return vote_spread(vote_histogram(r, lo, "vote_spread")); }
 
 }  // namespace vcar
