@@ -104,7 +104,7 @@ inline void occlusion_edges_in(const ImageF& alpha, const ImageF& depth, float d
   // pixel) divided once.
   const int W = alpha.width, H = alpha.height;
   if (b.empty()) return;
-  const PixelBox g{std::max(0, b.x0 - 1), std::max(0, b.y0 - 1), std::min(W, b.x1 + 1), std::min(H, b.y1 + 1)};
+  const PixelBox g = b.grown(1, W, H);
   std::vector<float> s(static_cast<std::size_t>(g.width()) * g.height());
   std::vector<std::uint8_t> has(s.size());
   for (int y = g.y0; y < g.y1; ++y)
@@ -151,7 +151,6 @@ public:
     occlusion_edges_in(*alpha_, *depth_, delta_, done_, e_);
     return e_;
   }
-  const std::vector<std::uint8_t>& whole() { return cover(PixelBox{0, 0, alpha_->width, alpha_->height}); }
 
 private:
   const ImageF* alpha_;

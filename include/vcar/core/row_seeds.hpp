@@ -18,7 +18,7 @@ class RowSeeds {
 public:
   // seed(x, y) for every pixel of a W x H image.
   template <class Seed>
-  RowSeeds(int width, int height, Seed&& seed) : width_(width), height_(height) {
+  RowSeeds(int width, int height, Seed&& seed) : height_(height) {
     start_.reserve(static_cast<std::size_t>(std::max(height, 0)) + 1);
     start_.push_back(0);
     for (int y = 0; y < height; ++y) {
@@ -55,7 +55,7 @@ public:
   }
 
 private:
-  int width_, height_;
+  int height_;
   std::vector<std::uint32_t> start_;  // row y's seeds: xs_[start_[y], start_[y + 1]), ascending
   std::vector<int> xs_;
 };
