@@ -820,6 +820,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "bench_field: %s, %zu seeds x %zu targets, %zu cells, %zu runs planned at %dx%d, %d threads -> %s\n",
                  o.quick ? "quick" : "full", seeds.size(), targets.size(), cells.size(), runs, d.width(), d.height(),
                  max_threads(), o.out.string().c_str());
+    if (!o.set.empty())  // easy to miss: the paper preset's rows keep the paper's values
+      std::fprintf(stderr, "bench_field: --set applies to the vcar:robust runs only (vcar:paper: nvos or lerf as published)\n");
     d.open();
     for (int seed : seeds)
       for (const std::string& t : targets) {
