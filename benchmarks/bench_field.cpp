@@ -3,7 +3,7 @@
 // target in turn; one CSV row per run, with the 2D quality of the segmenter's masks beside the
 // 3D result. docs/results.md ("Field") has the command, the table and the charts.
 //
-//   bench_field [--quick] [--out DIR] [--stage FILE] [--seeds tuning|heldout|all|N,N,...]
+//   bench_field [--quick] [--coarse-only] [--out DIR] [--stage FILE] [--seeds tuning|heldout|all|N,N,...]
 //               [--targets a,b] [--rigs forward,orbit,sparse]
 //               [--segmenters grabcut,oracle,oracle-sam,oracle-sam-nodrift,isnet,exact]
 //               [--methods vcar:paper,vcar:robust,vcar:code,naive,...] [--width W --height H]
@@ -12,6 +12,12 @@
 //               p_leak, leak_px, drift_px)
 //               [--isnet CMD] (the isnet segmenter's program; default node
 //               examples/segmenters/isnet/isnet.mjs of this source tree)
+//
+// --coarse-only: every VCAR run without a fine round (enable_sss and force_fine_round off, after
+// --set and an ablation row's keys), its `preset` column suffixed ":coarse-only": the regime of a
+// folder of masks with no segmenter for the renders, of views without a 90-degree gap, and of
+// Reselection, where G_coarse at tau_coarse is the selection
+// (docs/notes/field-tau-coarse-2026-12-07.md).
 //
 // Seeds: tuning seeds 1 and 2 (the default may be tuned on them), held-out reporting seeds
 // 11-15 (never tuned on); the CSV's `role` column says which a row is. --seeds all (default)
@@ -341,6 +347,7 @@ static_assert(Segmenter<CachedCoarse>);
 // ---------------------------------------------------------------------------------------------
 struct Options {
   bool quick = false;
+  bool coarse_only = false;  // --coarse-only: no fine round in any VCAR run (a mask folder, Reselection)
   std::filesystem::path out = "field-out";
   std::filesystem::path stage = VCAR_FIELD_STAGE_DEFAULT;
   std::string seeds = "all";
@@ -714,6 +721,10 @@ private:
         } else {
           throw Error("unknown VCAR variant '" + r.variant + "' (vcar:paper, vcar:robust, vcar:code or vcar:lean)", "--methods");
         }
+        if (opt_.coarse_only) {  // the coarse vote is the result, as with a mask folder or in Reselection
+          p.enable_sss = p.force_fine_round = false;
+          r.preset += ":coarse-only";
+        }
         CachedCoarse cached(seg.fn, names, by_frame);
         LastRenders renderer(renderer_);
         const double seg0 = seg.seconds ? *seg.seconds : 0.0;
@@ -784,6 +795,7 @@ int main(int argc, char** argv) {
       return argv[++i];
     };
     if (a == "--quick") o.quick = true;
+    else if (a == "--coarse-only") o.coarse_only = true;
     else if (a == "--out") o.out = value();
     else if (a == "--stage") o.stage = value();
     else if (a == "--seeds") o.seeds = value();
@@ -797,7 +809,7 @@ int main(int argc, char** argv) {
     else if (a == "--width") o.width = std::stoi(value());
     else if (a == "--height") o.height = std::stoi(value());
     else {
-      std::fprintf(stderr, "usage: %s [--quick] [--out DIR] [--stage FILE] [--seeds tuning|heldout|all|N,N,...] "
+      std::fprintf(stderr, "usage: %s [--quick] [--coarse-only] [--out DIR] [--stage FILE] [--seeds tuning|heldout|all|N,N,...] "
                            "[--targets a,b] [--rigs forward,orbit] [--segmenters grabcut,oracle,oracle-sam,oracle-sam-nodrift,isnet,exact] "
                            "[--methods vcar:paper,vcar:robust,vcar:code,vcar:lean,naive,sagd,flashsplat,gaussiancut,ludvig,lbg] "
                            "[--width W --height H] [--set key=value]... (vcar:robust only) "
