@@ -18,7 +18,7 @@ class RowSeeds {
 public:
   // seed(x, y) for every pixel of a W x H image.
   template <class Seed>
-  RowSeeds(int width, int height, Seed&& seed) : height_(height) {
+  RowSeeds(int width, int height, Seed&& seed) {
     start_.reserve(static_cast<std::size_t>(std::max(height, 0)) + 1);
     start_.push_back(0);
     for (int y = 0; y < height; ++y) {
@@ -43,10 +43,11 @@ public:
         if (best < 0 || d2 < best) best = d2;
       }
     };
-    for (int dy = 0; dy < height_; ++dy) {
+    const int height = static_cast<int>(start_.size()) - 1;
+    for (int dy = 0; dy < height; ++dy) {
       const long long dy2 = static_cast<long long>(dy) * dy;
       if (best >= 0 && dy2 >= best) break;  // every row left lies at least this far
-      const bool up = y - dy >= 0, down = dy > 0 && y + dy < height_;
+      const bool up = y - dy >= 0, down = dy > 0 && y + dy < height;
       if (!up && !down) break;
       if (up) row(y - dy, dy2);
       if (down) row(y + dy, dy2);
@@ -55,8 +56,7 @@ public:
   }
 
 private:
-  int height_;
-  std::vector<std::uint32_t> start_;  // row y's seeds: xs_[start_[y], start_[y + 1]), ascending
+  std::vector<std::uint32_t> start_;  // row y's seeds: xs_[start_[y], start_[y + 1]), ascending; H + 1 entries
   std::vector<int> xs_;
 };
 
