@@ -3,7 +3,7 @@
 // target in turn; one CSV row per run, with the 2D quality of the segmenter's masks beside the
 // 3D result. docs/results.md ("Field") has the command, the table and the charts.
 //
-//   bench_field [--quick] [--coarse-only] [--out DIR] [--stage FILE] [--seeds tuning|heldout|all|N,N,...]
+//   bench_field [--quick] [--coarse-only | --mask-folder] [--out DIR] [--stage FILE] [--seeds tuning|heldout|all|N,N,...]
 //               [--targets a,b] [--rigs forward,orbit,sparse]
 //               [--segmenters grabcut,oracle,oracle-sam,oracle-sam-nodrift,isnet,exact]
 //               [--methods vcar:paper,vcar:robust,vcar:code,naive,...] [--width W --height H]
@@ -14,10 +14,13 @@
 //               examples/segmenters/isnet/isnet.mjs of this source tree)
 //
 // --coarse-only: every VCAR run without a fine round (enable_sss and force_fine_round off, after
-// --set and an ablation row's keys), its `preset` column suffixed ":coarse-only": the regime of a
-// folder of masks with no segmenter for the renders, of views without a 90-degree gap, and of
-// Reselection, where G_coarse at tau_coarse is the selection
-// (docs/notes/field-tau-coarse-2026-12-07.md).
+// --set and an ablation row's keys), its `preset` column suffixed ":coarse-only": the regime of
+// views without a 90-degree gap, of a mask folder with SSS off, and of Reselection, where G_coarse
+// at tau_coarse is the selection (docs/notes/field-tau-coarse-2026-12-07.md).
+// --mask-folder: every VCAR run's fine round answered as io::MaskFolderSegmenter answers it from
+// a folder of the training views' masks (the coarse round's): each training view's render of
+// G_coarse gets that view's mask again, each sampled view none; `preset` suffixed ":mask-folder".
+// The regime of users' own masks with SSS on (`vcar segment --masks DIR`).
 //
 // Seeds: tuning seeds 1 and 2 (the default may be tuned on them), held-out reporting seeds
 // 11-15 (never tuned on); the CSV's `role` column says which a row is. --seeds all (default)
@@ -318,11 +321,21 @@ static_assert(Renderer<LastRenders>);
 // computed once for the case, every other round by the segmenter itself.
 class CachedCoarse {
 public:
-  CachedCoarse(SegmentFn inner, const std::vector<std::string>& names, const std::vector<std::optional<Mask>>& masks)
-      : inner_(std::move(inner)), names_(&names), masks_(&masks) {}
+  // folder: later rounds answered by view name from the cache, as a mask folder answers them.
+  CachedCoarse(SegmentFn inner, const std::vector<std::string>& names, const std::vector<std::optional<Mask>>& masks,
+               bool folder = false)
+      : inner_(std::move(inner)), names_(&names), masks_(&masks), folder_(folder) {}
   void segment(const FrameSequence& frames, const Prompt& prompt, const MaskSink& sink) {
     bool whole = !frames.subset;
     for (std::size_t k = 0; whole && frames.drawn && k < frames.size(); ++k) whole = frames.drawn(k) == nullptr;
+    if (!whole && folder_) {
+      for (std::size_t k = 0; k < frames.size(); ++k) {
+        const auto it = std::find(names_->begin(), names_->end(), frames.cameras[k].name);
+        const std::optional<Mask>* m = it == names_->end() ? nullptr : &(*masks_)[static_cast<std::size_t>(it - names_->begin())];
+        sink(k, m && *m ? &**m : nullptr);
+      }
+      return;
+    }
     if (!whole) {
       inner_(frames, prompt, sink);
       return;
@@ -340,6 +353,7 @@ private:
   SegmentFn inner_;
   const std::vector<std::string>* names_;
   const std::vector<std::optional<Mask>>* masks_;
+  bool folder_ = false;
   int hits_ = 0;
 };
 static_assert(Segmenter<CachedCoarse>);
@@ -347,7 +361,8 @@ static_assert(Segmenter<CachedCoarse>);
 // ---------------------------------------------------------------------------------------------
 struct Options {
   bool quick = false;
-  bool coarse_only = false;  // --coarse-only: no fine round in any VCAR run (a mask folder, Reselection)
+  bool coarse_only = false;  // --coarse-only: no fine round in any VCAR run (Reselection)
+  bool mask_folder = false;  // --mask-folder: the fine round's masks as a folder of training masks answers
   std::filesystem::path out = "field-out";
   std::filesystem::path stage = VCAR_FIELD_STAGE_DEFAULT;
   std::string seeds = "all";
@@ -725,7 +740,8 @@ private:
           p.enable_sss = p.force_fine_round = false;
           r.preset += ":coarse-only";
         }
-        CachedCoarse cached(seg.fn, names, by_frame);
+        if (opt_.mask_folder) r.preset += ":mask-folder";
+        CachedCoarse cached(seg.fn, names, by_frame, opt_.mask_folder);
         LastRenders renderer(renderer_);
         const double seg0 = seg.seconds ? *seg.seconds : 0.0;
         SegmentationResult res = segment(w.scene, rig.train, k.prompt, renderer, cached, p);
@@ -796,6 +812,7 @@ int main(int argc, char** argv) {
     };
     if (a == "--quick") o.quick = true;
     else if (a == "--coarse-only") o.coarse_only = true;
+    else if (a == "--mask-folder") o.mask_folder = true;
     else if (a == "--out") o.out = value();
     else if (a == "--stage") o.stage = value();
     else if (a == "--seeds") o.seeds = value();
@@ -809,7 +826,7 @@ int main(int argc, char** argv) {
     else if (a == "--width") o.width = std::stoi(value());
     else if (a == "--height") o.height = std::stoi(value());
     else {
-      std::fprintf(stderr, "usage: %s [--quick] [--coarse-only] [--out DIR] [--stage FILE] [--seeds tuning|heldout|all|N,N,...] "
+      std::fprintf(stderr, "usage: %s [--quick] [--coarse-only | --mask-folder] [--out DIR] [--stage FILE] [--seeds tuning|heldout|all|N,N,...] "
                            "[--targets a,b] [--rigs forward,orbit] [--segmenters grabcut,oracle,oracle-sam,oracle-sam-nodrift,isnet,exact] "
                            "[--methods vcar:paper,vcar:robust,vcar:code,vcar:lean,naive,sagd,flashsplat,gaussiancut,ludvig,lbg] "
                            "[--width W --height H] [--set key=value]... (vcar:robust only) "
@@ -819,6 +836,7 @@ int main(int argc, char** argv) {
     }
   }
   if ((o.width > 0) != (o.height > 0)) { std::fprintf(stderr, "bench_field: give both --width and --height\n"); return 2; }
+  if (o.coarse_only && o.mask_folder) { std::fprintf(stderr, "bench_field: --coarse-only and --mask-folder exclude each other\n"); return 2; }
   try {
     const auto t0 = Clock::now();
     const std::vector<int> seeds = o.quick && o.seeds == "all" ? std::vector<int>{kTuningSeeds.front()} : parse_seeds(o.seeds);
