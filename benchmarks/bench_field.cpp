@@ -736,7 +736,7 @@ private:
         } else {
           throw Error("unknown VCAR variant '" + r.variant + "' (vcar:paper, vcar:robust, vcar:code or vcar:lean)", "--methods");
         }
-        if (opt_.coarse_only) {  // the coarse vote is the result, as with a mask folder or in Reselection
+        if (opt_.coarse_only) {  // the coarse vote is the result, as in Reselection or with SSS off
           p.enable_sss = p.force_fine_round = false;
           r.preset += ":coarse-only";
         }
