@@ -269,6 +269,38 @@ TEST_CASE("robust preset: fine-round frames render a subset (FrameSequence::subs
   CHECK(renders >= static_cast<int>(cams.size() + cams.size() + 32));
 }
 
+TEST_CASE("a fine round without any mask keeps G_coarse and ABR on the coarse masks (a mask folder's fine round)") {
+  auto w = two_blobs();
+  const auto cams = forward_rig();
+  auto renderer = disc_over_wall_renderer();
+  // Answers the whole scene's frames (the coarse round) and no frame of a subset (the fine round),
+  // as a folder of the captures' masks would once it answers "no mask" for renders of G_coarse.
+  auto seg = vcar::make_segmenter([](const vcar::FrameSequence& f, const vcar::Prompt&) {
+    std::vector<std::optional<vcar::Mask>> masks(f.size());
+    if (!f.subset)
+      for (std::size_t k = 0; k < f.size(); ++k) masks[k] = blob_a_mask(f.cameras[k]);
+    return masks;
+  });
+  vcar::Prompt prompt;
+  prompt.reference_view = 4;
+  for (auto p : {vcar::VcarParams::robust(), vcar::VcarParams::nvos()}) {
+    const auto r = vcar::segment(w.scene, cams, prompt, renderer, seg, p);
+    p.enable_sss = false;
+    p.force_fine_round = false;
+    const auto coarse_only = vcar::segment(w.scene, cams, prompt, renderer, seg, p);
+    CHECK(r.diagnostics.sss_triggered);
+    CHECK(r.diagnostics.masks_missing == cams.size() + r.diagnostics.sampled_cameras.size());
+    CHECK(same_set(r.indices, w.a));
+    CHECK(r.indices == coarse_only.indices);
+    CHECK(r.scores == coarse_only.scores);
+    CHECK(r.log_scale == coarse_only.log_scale);  // ABR read the coarse round's masks
+    CHECK(r.diagnostics.n_fine == r.diagnostics.n_coarse);
+    CHECK(r.diagnostics.tau_fine_applied == 0.f);
+    CHECK(r.diagnostics.note.find("no frame of the fine round had a mask") != std::string::npos);
+    CHECK(coarse_only.diagnostics.note.empty());
+  }
+}
+
 TEST_CASE("RenderNeed: a fine round that reads alpha only (Eq. R6 alone) keeps its renders and asks no depth") {
   auto w = two_blobs();
   const auto cams = forward_rig();

@@ -38,7 +38,7 @@ struct Diagnostics {
   std::size_t masks_grown = 0;       // coarse-round masks voted grown to the render's occlusion edges (Eq. R12)
   std::size_t masks_missing = 0;    // frames the segmenter answered with "no mask"
   std::size_t mask_store_bytes = 0; // run-length bytes held for ABR
-  std::string note;                 // why the pipeline stopped early, if it did
+  std::string note;                 // why the pipeline stopped early, or kept G_coarse (a fine round without masks)
   std::vector<std::pair<std::string, double>> timings_s;  // stage -> seconds, in order
 
   // Calls f(name, key, field) for every field: `name` as declared (the Python dict's keys),

@@ -91,7 +91,7 @@ inline LogScales refine_boundaries(const GaussianScene& scene, const std::vector
 //   finish()     R8 and ABR: fills the result.
 // start() and end_round() return false when a stage selected nothing
 // (diagnostics.note says which). `train_masks` holds the coarse round's training masks (indexed
-// by training view) for ABR and takes the fine round's.
+// by training view) for ABR and takes the fine round's (keeps its own when no fine frame gets a mask).
 class ObjectRefinement {
 public:
   ObjectRefinement(const GaussianScene& scene, const std::vector<Camera>& train_cameras, const Prompt& prompt,
@@ -145,7 +145,8 @@ public:
     // of the whole scene: this round renders G_coarse, which the masks shaped, so masks that
     // undershoot would read as overshooting a G_coarse they eroded.
     if (diag_.overshoot_eroded == 0) fine_->no_overshoot();
-    for (auto& m : train_masks_) m.reset();
+    coarse_masks_ = std::move(train_masks_);  // ABR's again if no fine frame gets a mask
+    train_masks_.assign(coarse_masks_.size(), std::nullopt);
     return true;
   }
 
@@ -165,6 +166,7 @@ public:
       undershoot_[order_[t]] = m ? fine_->last_undershoot_px() : 0.0;
     }
     if (m) round_undershoot_.push_back(fine_->last_undershoot_px());
+    fine_masks_ += m != nullptr;
   }
 
   // After the round: its timings (render, segmenter, voting) and the fine selection (Eq. 3, R14, R7).
@@ -173,6 +175,13 @@ public:
     timing("fine_segment", segment_s);
     timing("fine_voting", voting_s);
     diag_.overshoot_eroded += fine_->overshoot_eroded();
+    if (fine_masks_ == 0) {  // no evidence at all: G_coarse stands, ABR on the coarse round's masks
+      fine_.reset();
+      train_masks_ = std::move(coarse_masks_);
+      diag_.note = "no frame of the fine round had a mask (a segmenter that does not answer renders of G_coarse, "
+                   "such as a mask folder): the result is G_coarse";
+      return true;
+    }
     fine_->weigh_views(params_.tau_fine);  // Eq. R13
     float tau = params_.tau_fine;
     if (params_.valley.enabled) {
@@ -241,6 +250,8 @@ private:
   std::vector<Camera> fine_frames_;
   std::vector<std::size_t> fine_train_;  // fine frame -> training frame k (npos: sampled)
   std::optional<RoundVote> fine_;
+  std::size_t fine_masks_ = 0;  // fine frames voted with a mask
+  std::vector<std::optional<RleMask>> coarse_masks_;  // the coarse round's training masks, during the fine round
   Mask scratch_;  // a mask eroded by Eq. R11
 };
 
