@@ -17,9 +17,10 @@
 // --set and an ablation row's keys), its `preset` column suffixed ":coarse-only": the regime of
 // views without a 90-degree gap, of a mask folder with SSS off, and of Reselection, where G_coarse
 // at tau_coarse is the selection (docs/notes/field-tau-coarse-2026-12-07.md).
-// --mask-folder: every VCAR run's fine round answered as io::MaskFolderSegmenter answers it from
-// a folder of the training views' masks (the coarse round's): each training view's render of
-// G_coarse gets that view's mask again, each sampled view none; `preset` suffixed ":mask-folder".
+// --mask-folder: every VCAR run's fine round answered as io::MaskFolderSegmenter answers it: a
+// folder holds masks of the captures, not of renders of G_coarse, so every fine frame gets no
+// mask and the pipeline keeps G_coarse (until 2026-12-07 each training view's render got that
+// view's mask again: docs/notes/field-mask-folder-2026-12-07.md); `preset` suffixed ":mask-folder".
 // The regime of users' own masks with SSS on (`vcar segment --masks DIR`).
 //
 // Seeds: tuning seeds 1 and 2 (the default may be tuned on them), held-out reporting seeds
@@ -103,6 +104,7 @@
 #include "vcar/core/parallel.hpp"
 #include "vcar/eval/mask_metrics.hpp"
 #include "vcar/io/external_segmenter.hpp"
+#include "vcar/io/mask_folder_segmenter.hpp"
 #include "vcar/io/params_text.hpp"
 #include "vcar/io/scene_file.hpp"
 #include "vcar/synth/ground_truth.hpp"
@@ -321,19 +323,15 @@ static_assert(Renderer<LastRenders>);
 // computed once for the case, every other round by the segmenter itself.
 class CachedCoarse {
 public:
-  // folder: later rounds answered by view name from the cache, as a mask folder answers them.
+  // folder: later rounds answered as a mask folder answers them (MaskFolderSegmenter::has_masks_of).
   CachedCoarse(SegmentFn inner, const std::vector<std::string>& names, const std::vector<std::optional<Mask>>& masks,
                bool folder = false)
       : inner_(std::move(inner)), names_(&names), masks_(&masks), folder_(folder) {}
   void segment(const FrameSequence& frames, const Prompt& prompt, const MaskSink& sink) {
     bool whole = !frames.subset;
     for (std::size_t k = 0; whole && frames.drawn && k < frames.size(); ++k) whole = frames.drawn(k) == nullptr;
-    if (!whole && folder_) {
-      for (std::size_t k = 0; k < frames.size(); ++k) {
-        const auto it = std::find(names_->begin(), names_->end(), frames.cameras[k].name);
-        const std::optional<Mask>* m = it == names_->end() ? nullptr : &(*masks_)[static_cast<std::size_t>(it - names_->begin())];
-        sink(k, m && *m ? &**m : nullptr);
-      }
+    if (!whole && folder_ && !MaskFolderSegmenter::has_masks_of(frames)) {
+      for (std::size_t k = 0; k < frames.size(); ++k) sink(k, nullptr);
       return;
     }
     if (!whole) {
@@ -362,7 +360,7 @@ static_assert(Segmenter<CachedCoarse>);
 struct Options {
   bool quick = false;
   bool coarse_only = false;  // --coarse-only: no fine round in any VCAR run (Reselection)
-  bool mask_folder = false;  // --mask-folder: the fine round's masks as a folder of training masks answers
+  bool mask_folder = false;  // --mask-folder: the fine round answered as a folder of masks answers it
   std::filesystem::path out = "field-out";
   std::filesystem::path stage = VCAR_FIELD_STAGE_DEFAULT;
   std::string seeds = "all";

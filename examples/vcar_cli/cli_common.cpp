@@ -284,9 +284,7 @@ std::string summary_text(const Diagnostics& d, const VcarParams& p, std::size_t 
       s += buf;
     }
     s += "\n";
-    if (mask_source_folder && masks->sampled_missing > 0)
-      s += "note: a mask folder holds no masks of the views SSS sampled (named sss_...), so they add no evidence; "
-           "use --segmenter-cmd to segment them, or --set enable_sss=false\n";
+    if (mask_source_folder && d.sss_triggered) s += mask_folder_advice;
   }
   std::snprintf(buf, sizeof buf, "time      %.1f s on %d threads, peak memory %.0f MiB\n", seconds, max_threads(), peak_rss_mib());
   s += buf;

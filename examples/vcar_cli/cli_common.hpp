@@ -125,13 +125,18 @@ double peak_rss_mib();
 // The summary `segment` and `demo` print: one line each for the counts (selected / coarse /
 // fine), the view gap and whether SSS ran, ABR, missing masks (when `masks` is given: training
 // and sampled views, last round), time and peak memory. `mask_source_folder` adds the advice
-// for sampled views a mask folder cannot answer.
+// for the fine round a mask folder cannot answer (mask_folder_advice) when SSS ran.
 struct MaskCounts {
   std::size_t training = 0, training_missing = 0, sampled = 0, sampled_missing = 0;
 };
 std::string summary_text(const Diagnostics& d, const VcarParams& p, std::size_t scene_size,
                          const MaskCounts* masks, double seconds, bool mask_source_folder);
 nlohmann::json mask_counts_json(const MaskCounts& m);
+// The advice `segment` and `segment-objects` print when SSS ran on a mask folder's masks.
+inline constexpr const char* mask_folder_advice =
+    "note: a mask folder holds masks of the captures, not of the fine round's renders of G_coarse "
+    "(nor of the views SSS sampled), so the fine round had none and the result is G_coarse; use "
+    "--segmenter-cmd to segment the fine round's frames\n";
 
 // ---- outputs shared by `segment` and `demo` -------------------------------------------------
 // Writes object.ply, removed.ply, selection.json and report.json into `out`, and returns the

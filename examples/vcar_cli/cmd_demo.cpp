@@ -52,10 +52,7 @@ int run_demo(const DemoOptions& o, const GlobalOptions& g) {
   const SegmentationResult result =
       segment(world.scene, rig.train, prompt, renderer, tally, params, progress.callback());
   MaskCounts counts;
-  if (!tally.rounds().empty()) {
-    const RoundTally& t = tally.rounds().back();
-    counts = {t.training, t.training_missing, t.sampled, t.sampled_missing};
-  }
+  if (const RoundTally* t = tally.used()) counts = {t->training, t->training_missing, t->sampled, t->sampled_missing};
 
   progress.message("writing results");
   nlohmann::json inputs = {{"scene", "built-in synthetic world"}, {"seed", demo_seed},

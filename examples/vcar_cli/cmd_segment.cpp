@@ -167,10 +167,8 @@ int run_segment(const SegmentOptions& o, const GlobalOptions& g) {
   auto tallied = [&](auto& segmenter, const io::ExternalSegmenter* ext, MaskCounts& counts) {
     TallySegmenter tally(segmenter, cams);
     SegmentationResult r = with_renderer(tally, ext);
-    if (!tally.rounds().empty()) {  // the last round: the masks the final vote and ABR used
-      const RoundTally& t = tally.rounds().back();
-      counts = {t.training, t.training_missing, t.sampled, t.sampled_missing};
-    }
+    if (const RoundTally* t = tally.used())  // the masks the final vote and ABR used
+      counts = {t->training, t->training_missing, t->sampled, t->sampled_missing};
     return r;
   };
 

@@ -293,8 +293,7 @@ int run_segment_objects(const SegmentOptions& o, const GlobalOptions& g) {
   if (!o.masks.empty())
     for (const SegmentationResult& r : result.objects)
       if (r.diagnostics.sss_triggered) {
-        std::printf("note: a mask folder holds no masks of the views SSS sampled (named sss_...), so they add no evidence; "
-                    "use --segmenter-cmd to segment them, or --set enable_sss=false\n");
+        std::fputs(mask_folder_advice, stdout);
         break;
       }
   std::printf("time      %.1f s on %d threads, peak memory %.0f MiB\n", seconds, max_threads(), peak_rss_mib());

@@ -39,6 +39,14 @@ public:
   }
 
   const std::vector<RoundTally>& rounds() const noexcept { return rounds_; }
+  // The round whose masks the final vote and ABR used: the last with any mask (a fine round
+  // without masks keeps G_coarse, e.g. a mask folder's); the last round if none had one; null
+  // before any round.
+  const RoundTally* used() const noexcept {
+    for (auto it = rounds_.rbegin(); it != rounds_.rend(); ++it)
+      if (it->training_missing + it->sampled_missing < it->training + it->sampled) return &*it;
+    return rounds_.empty() ? nullptr : &rounds_.back();
+  }
 
 private:
   S* inner_;

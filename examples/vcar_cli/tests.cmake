@@ -264,14 +264,15 @@ vcar_cli_test(NAME segment_masks_match_no_view
   FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_bad_inputs"
   CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DCLEAN=${_cli_work}/seg_nomatch"
          "-DSTDERR_HAS=no mask matches a view|masks_renamed/train_000.png|mask_000" "-DABSENT=${_cli_work}/seg_nomatch")
-# Half the masks: a warning naming them, the count in the summary and report; with SSS forced
-# on, the note that a folder cannot answer the sampled views.
+# Half the masks: a warning naming them, the count in the summary and report (the coarse round's:
+# the masks the result used); with SSS forced on, the note that a folder cannot answer the fine
+# round, which keeps G_coarse.
 vcar_cli_test(NAME segment_masks_half_missing
   ARGS "${_seg_common}|--masks|${_bad}/masks_half|--set|force_sss=true|--out|${_cli_work}/seg_half" RC 0
   FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_bad_inputs"
   CHECKS "-DPROMPT_FROM=${_cli_ds}" "-DCLEAN=${_cli_work}/seg_half"
          "-DSTDERR_HAS=vcar: warning: 4 of 8 views have no mask|masks_half/train_004.png"
-         "-DSTDOUT_HAS=masks     4 of 8 training views missing|sampled views missing|use --segmenter-cmd to segment them"
+         "-DSTDOUT_HAS=masks     4 of 8 training views missing|no frame of the fine round had a mask|use --segmenter-cmd to segment the fine round"
          "-DEQUALS=${_cli_work}/seg_half/report.json:masks.training_missing:4")
 vcar_cli_test(NAME segment_duplicate_view_names
   ARGS "segment|--scene|${_cli_ds}/scene.ply|--cameras|${_bad}/cameras_dup.json|--masks|${_cli_ds}/masks|--out|${_cli_work}/seg_dup" RC 2
@@ -466,7 +467,8 @@ add_test(NAME cli/reorder_scene
           sh ${CMAKE_CURRENT_SOURCE_DIR}/reorder_ply.py ${_cli_ds} ${_cli_work})
 set_tests_properties(cli/reorder_scene PROPERTIES FIXTURES_REQUIRED vcar_cli_dataset FIXTURES_SETUP vcar_cli_reordered)
 # Segmenting the reversed copy and scoring on the dataset (original order) only works by
-# identity: applied by index, the selection would name other Gaussians.
+# identity: applied by index, the selection would name other Gaussians (3D precision about the
+# target's share of the scene, 626 of 4000; a mask folder's result is G_coarse, 0.46 here).
 vcar_cli_test(NAME segment_reordered_scene
   ARGS "segment|--scene|${_cli_work}/reversed.ply|--cameras|${_cli_ds}/cameras.json|--masks|${_cli_ds}/masks|--out|${_cli_work}/seg_reversed" RC 0
   FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_reordered" FIXTURES_SETUP vcar_cli_reversed_selection
@@ -474,7 +476,7 @@ vcar_cli_test(NAME segment_reordered_scene
 vcar_cli_test(NAME eval_reordered_selection
   ARGS "eval|--dataset|${_cli_ds}|--selection|${_cli_work}/seg_reversed/selection.json|--json" RC 0
   FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_reversed_selection"
-  CHECKS "-DAT_LEAST=-:mIoU:0.5|-:recall_3d:0.5|-:precision_3d:0.5")
+  CHECKS "-DAT_LEAST=-:mIoU:0.5|-:recall_3d:0.5|-:precision_3d:0.3")
 vcar_cli_test(NAME render_selection_on_reordered_scene
   ARGS "render|--scene|${_cli_work}/reversed.ply|--cameras|${_cli_ds}/cameras.json|--view|train_000|--selection|${_cli_work}/seg_masks/selection.json|--out|${_cli_work}/reversed.png" RC 0
   FIXTURES_REQUIRED "vcar_cli_dataset;vcar_cli_selection;vcar_cli_reordered" CHECKS "-DFILES=${_cli_work}/reversed.png")

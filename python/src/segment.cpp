@@ -501,8 +501,10 @@ sum z alpha T (gsplat's "D" / "RGB+D", not the alpha-normalised "ED").)doc")
 
   py::class_<MaskFolderSegmenterPy>(m, "MaskFolderSegmenter", R"doc(
 Masks from a folder: frame k gets the file whose stem is the stem of its camera's name (.png
-before .jpg/.jpeg); no file = no mask (as `vcar segment --masks DIR`). Runs in C++ when given to
-vcar.segment; also a callable taking a request.)doc")
+before .jpg/.jpeg); no file = no mask (as `vcar segment --masks DIR`). The files are masks of the
+captures: frames that render a subset (request.subset, the fine round) get no mask, and the
+pipeline keeps G_coarse. Runs in C++ when given to vcar.segment; also a callable taking a
+request.)doc")
       .def(py::init([](const std::string& dir) {
              MaskFolderSegmenterPy s;
              s.seg.emplace(dir);

@@ -38,6 +38,15 @@ TEST_CASE("MaskFolderSegmenter answers each frame with the mask named after its 
   CHECK(std::count(masks[2]->data.begin(), masks[2]->data.end(), 0) == 12);
   CHECK(!masks[3]);   // no file: no evidence
 
+  // Renders of a subset (the fine round's renders of G_coarse) are not the captures the files
+  // are masks of: every frame gets "no mask".
+  vcar::FrameSequence subset{cams, [](std::size_t) -> vcar::ImageRGB8 { FAIL("must not render"); return {}; }, true, {}};
+  CHECK_FALSE(vcar::io::MaskFolderSegmenter::has_masks_of(subset));
+  CHECK(vcar::io::MaskFolderSegmenter::has_masks_of(frames));
+  const auto none = vcar::segment_all(seg, subset, vcar::Prompt{});
+  REQUIRE(none.size() == 4);
+  CHECK(std::none_of(none.begin(), none.end(), [](const auto& m) { return m.has_value(); }));
+
   vcar::MaskFolderSegmenter alias(tmp.path);  // the name the Segmenter docs use
   cams[0].width = 5;
   vcar::FrameSequence wrong{cams, {}, false, {}};

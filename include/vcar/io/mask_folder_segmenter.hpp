@@ -4,6 +4,11 @@
 // .png preferred over .jpg / .jpeg; a frame without a file gets "no mask" (no evidence,
 // conventions §4). The prompt is ignored: the masks already are the answer. Masks are read one at
 // a time and streamed to the sink; a mask of the wrong size is an error naming the file.
+// The files are masks of the captured images (renders of the whole scene). Frames that render a
+// subset (the fine round's renders of G_coarse, FrameSequence::subset) are other images: the
+// folder answers each of them "no mask", and the pipeline keeps G_coarse (docs/robust.md, "A
+// folder of masks").
+
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
@@ -25,7 +30,14 @@ public:
 
   const std::filesystem::path& dir() const noexcept { return dir_; }
 
+  // Whether the folder holds masks of these frames: only of renders of the whole scene.
+  static bool has_masks_of(const FrameSequence& frames) noexcept { return !frames.subset; }
+
   void segment(const FrameSequence& frames, const Prompt&, const MaskSink& sink) {
+    if (!has_masks_of(frames)) {
+      for (std::size_t k = 0; k < frames.size(); ++k) sink(k, nullptr);
+      return;
+    }
     const auto files = index();  // scanned per round: the folder may change between rounds
     for (std::size_t k = 0; k < frames.size(); ++k) {
       const Camera& cam = frames.cameras[k];
