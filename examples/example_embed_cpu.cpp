@@ -113,8 +113,9 @@ int main(int argc, char** argv) try {
   if (args.size() >= 3) {  // a real scene: PLY + cameras + a folder of masks
     const vcar::GaussianScene scene = vcar::io::read_ply(args[0]);
     const std::vector<vcar::Camera> cameras = vcar::io::read_cameras(args[1]);
-    // Precomputed masks cover the training views only: the spiral's sampled views (SSS) get
-    // "no mask" and vote as no evidence. A live segmenter (SAM 2 on the rendered frames) fills them.
+    // Precomputed masks are masks of the captures: the fine round's renders of G_coarse (and the
+    // spiral's sampled views) get "no mask", and the result is G_coarse after ABR. A live
+    // segmenter (SAM 2 on the rendered frames) runs the fine round.
     vcar::io::MaskFolderSegmenter masks(args[2]);
     // The reference view: its name (as in the camera file), or its position among the cameras.
     std::size_t ref = 0;
