@@ -182,6 +182,7 @@ public:
                    "such as a mask folder): the result is G_coarse";
       return true;
     }
+    coarse_masks_ = {};  // the fine round's masks replace them
     fine_->weigh_views(params_.tau_fine);  // Eq. R13
     float tau = params_.tau_fine;
     if (params_.valley.enabled) {

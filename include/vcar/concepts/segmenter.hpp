@@ -12,7 +12,9 @@
 //    G_coarse only); `frames.drawn(k)`, when the function is set, names the Gaussians frame k
 //    draws (indices into the scene; null: the whole scene), for segmenters that model what a
 //    render shows (the synthetic oracle's rendered mode). An empty function means the whole
-//    scene where `subset` is false, unknown where it is true.
+//    scene where `subset` is false, unknown where it is true. A segmenter whose masks are of the
+//    captured images rather than of the frames (a folder of precomputed masks) answers the frames
+//    of a subset "no mask": the pipeline then keeps G_coarse.
 //  - `prompt` is passed through unchanged: points (pixels of the reference view, label 1 =
 //    positive, 0 = negative), an optional box (x0, y0, x1, y1) or text.
 //  - the segmenter calls `sink(k, &mask)` for each frame k it has a mask for, or `sink(k,
