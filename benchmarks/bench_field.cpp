@@ -328,12 +328,12 @@ public:
                bool folder = false)
       : inner_(std::move(inner)), names_(&names), masks_(&masks), folder_(folder) {}
   void segment(const FrameSequence& frames, const Prompt& prompt, const MaskSink& sink) {
-    bool whole = !frames.subset;
-    for (std::size_t k = 0; whole && frames.drawn && k < frames.size(); ++k) whole = frames.drawn(k) == nullptr;
-    if (!whole && folder_ && !MaskFolderSegmenter::has_masks_of(frames)) {
+    if (folder_ && !MaskFolderSegmenter::has_masks_of(frames)) {
       for (std::size_t k = 0; k < frames.size(); ++k) sink(k, nullptr);
       return;
     }
+    bool whole = !frames.subset;
+    for (std::size_t k = 0; whole && frames.drawn && k < frames.size(); ++k) whole = frames.drawn(k) == nullptr;
     if (!whole) {
       inner_(frames, prompt, sink);
       return;

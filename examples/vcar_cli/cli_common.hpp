@@ -133,10 +133,10 @@ std::string summary_text(const Diagnostics& d, const VcarParams& p, std::size_t 
                          const MaskCounts* masks, double seconds, bool mask_source_folder);
 nlohmann::json mask_counts_json(const MaskCounts& m);
 // The advice `segment` and `segment-objects` print when SSS ran on a mask folder's masks.
+// (The library's own note already says that the fine round had no mask.)
 inline constexpr const char* mask_folder_advice =
-    "note: a mask folder holds masks of the captures, not of the fine round's renders of G_coarse "
-    "(nor of the views SSS sampled), so the fine round had none and the result is G_coarse; use "
-    "--segmenter-cmd to segment the fine round's frames\n";
+    "note: a mask folder holds masks of the captures only; use --segmenter-cmd to segment the fine round's "
+    "renders of G_coarse\n";
 
 // ---- outputs shared by `segment` and `demo` -------------------------------------------------
 // Writes object.ply, removed.ply, selection.json and report.json into `out`, and returns the

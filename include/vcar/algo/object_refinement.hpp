@@ -166,7 +166,6 @@ public:
       undershoot_[order_[t]] = m ? fine_->last_undershoot_px() : 0.0;
     }
     if (m) round_undershoot_.push_back(fine_->last_undershoot_px());
-    fine_masks_ += m != nullptr;
   }
 
   // After the round: its timings (render, segmenter, voting) and the fine selection (Eq. 3, R14, R7).
@@ -175,7 +174,7 @@ public:
     timing("fine_segment", segment_s);
     timing("fine_voting", voting_s);
     diag_.overshoot_eroded += fine_->overshoot_eroded();
-    if (fine_masks_ == 0) {  // no evidence at all: G_coarse stands, ABR on the coarse round's masks
+    if (round_undershoot_.empty()) {  // no frame had a mask: G_coarse stands, ABR on the coarse round's masks
       fine_.reset();
       train_masks_ = std::move(coarse_masks_);
       diag_.note = "no frame of the fine round had a mask (a segmenter that does not answer renders of G_coarse, "
@@ -245,13 +244,12 @@ private:
   Diagnostics& diag_;
   std::vector<std::size_t> order_;  // frame k of a round -> training view
   std::vector<double> undershoot_;  // Eq. R6a of each training view's fine-round mask (px)
-  std::vector<double> round_undershoot_;  // Eq. R6a of every masked fine frame (px), for R14's gate
+  std::vector<double> round_undershoot_;  // Eq. R6a of every masked fine frame (px), for R14's gate (one per mask)
   FineVerdict verdict_;             // the fine vote's (Eq. R7, R6c); none without a fine round
   std::vector<Index> coarse_set_;   // G_coarse, the fine round's renders
   std::vector<Camera> fine_frames_;
   std::vector<std::size_t> fine_train_;  // fine frame -> training frame k (npos: sampled)
   std::optional<RoundVote> fine_;
-  std::size_t fine_masks_ = 0;  // fine frames voted with a mask
   std::vector<std::optional<RleMask>> coarse_masks_;  // the coarse round's training masks, during the fine round
   Mask scratch_;  // a mask eroded by Eq. R11
 };

@@ -8,7 +8,6 @@
 // subset (the fine round's renders of G_coarse, FrameSequence::subset) are other images: the
 // folder answers each of them "no mask", and the pipeline keeps G_coarse (docs/robust.md, "A
 // folder of masks").
-
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
